@@ -1,0 +1,1 @@
+//! Fixed-memory incremental least squares for the load's inertia and drag.

@@ -1,0 +1,1 @@
+//! A Sans-IO Cyphal node.

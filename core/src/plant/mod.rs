@@ -1,0 +1,1 @@
+//! The mechanical load model shared by the host simulator and the firmware demo.

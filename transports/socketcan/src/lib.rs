@@ -1,0 +1,4 @@
+//! # propid-socketcan
+//!
+//! Linux SocketCAN transport.
+#![deny(missing_docs)]
