@@ -1,0 +1,2 @@
+//! Placeholder until the dsdl benchmark lands.
+fn main() {}

@@ -1,0 +1,2 @@
+//! Placeholder until the estimator benchmark lands.
+fn main() {}

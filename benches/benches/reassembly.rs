@@ -1,0 +1,2 @@
+//! Placeholder until the reassembly benchmark lands.
+fn main() {}
