@@ -6,6 +6,7 @@
 //! `diagnose`, plots) read it.
 #![deny(missing_docs)]
 
+pub mod bus;
 pub mod demo;
 pub mod diagnose;
 pub mod drive;
@@ -15,6 +16,7 @@ pub mod plot;
 pub mod replay;
 pub mod sim;
 pub mod sim_drive;
+pub mod steady;
 pub mod tsv;
 
 /// An error caused by bad input (a file's content, an argument's value). The binary exits with

@@ -1,0 +1,1 @@
+//! Opening a CAN bus from a PyCyphal-style interface string (not yet implemented).

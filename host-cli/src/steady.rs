@@ -1,0 +1,1 @@
+//! Steady-state (plateau) analysis of the drag law (not yet implemented).
