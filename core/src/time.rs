@@ -66,7 +66,13 @@ mod tests {
             (t + Duration::from_micros(7)).saturating_duration_since(t),
             Duration::from_micros(7)
         );
-        assert_eq!(t.saturating_duration_since(t + Duration::from_secs(1)), Duration::ZERO);
-        assert_eq!(Instant::from_micros(u64::MAX - 1) + Duration::from_secs(1), Instant::from_micros(u64::MAX));
+        assert_eq!(
+            t.saturating_duration_since(t + Duration::from_secs(1)),
+            Duration::ZERO
+        );
+        assert_eq!(
+            Instant::from_micros(u64::MAX - 1) + Duration::from_secs(1),
+            Instant::from_micros(u64::MAX)
+        );
     }
 }

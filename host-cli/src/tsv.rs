@@ -43,7 +43,14 @@ pub struct Row {
 }
 
 /// The header `propid` writes.
-pub const HEADER: [&str; 6] = ["ts_local", "t", "force", "velocity", "acceleration", "position"];
+pub const HEADER: [&str; 6] = [
+    "ts_local",
+    "t",
+    "force",
+    "velocity",
+    "acceleration",
+    "position",
+];
 
 /// Why a TSV could not be read. Every variant names where.
 #[derive(Debug, thiserror::Error)]
@@ -77,7 +84,9 @@ pub enum TsvError {
         text: String,
     },
     /// A row has fewer fields than a required column's index.
-    #[error("{source_name}: line {line}: row has {found} fields, column `{column}` is field {needed}")]
+    #[error(
+        "{source_name}: line {line}: row has {found} fields, column `{column}` is field {needed}"
+    )]
     ShortRow {
         /// File name or `<stdin>`.
         source_name: String,
@@ -124,7 +133,9 @@ impl<R: BufRead> TsvReader<R> {
             line: 1,
             source: e,
         })?;
-        let header_trimmed = header.trim_end_matches(['\r', '\n']).trim_start_matches('\u{feff}');
+        let header_trimmed = header
+            .trim_end_matches(['\r', '\n'])
+            .trim_start_matches('\u{feff}');
         if n == 0 || header_trimmed.trim().is_empty() {
             return Err(TsvError::Empty { source_name });
         }
@@ -176,11 +187,14 @@ impl<R: BufRead> TsvReader<R> {
     pub fn next_row(&mut self) -> Result<Option<Row>, TsvError> {
         loop {
             self.line.clear();
-            let n = self.input.read_line(&mut self.line).map_err(|e| TsvError::Io {
-                source_name: self.source_name.clone(),
-                line: self.line_no + 1,
-                source: e,
-            })?;
+            let n = self
+                .input
+                .read_line(&mut self.line)
+                .map_err(|e| TsvError::Io {
+                    source_name: self.source_name.clone(),
+                    line: self.line_no + 1,
+                    source: e,
+                })?;
             if n == 0 {
                 return Ok(None);
             }
@@ -261,7 +275,14 @@ impl<W: Write> TsvWriter<W> {
     /// Writes one row. NaN is written as `nan` (the seed's Python prints the same).
     pub fn write(&mut self, row: &Row) -> std::io::Result<()> {
         let s = &row.sample;
-        let fields = [row.ts_local, s.t, s.force, s.velocity, s.acceleration, s.position];
+        let fields = [
+            row.ts_local,
+            s.t,
+            s.force,
+            s.velocity,
+            s.acceleration,
+            s.position,
+        ];
         let mut line = String::with_capacity(96);
         for (i, v) in fields.iter().enumerate() {
             if i > 0 {
@@ -319,14 +340,32 @@ mod tests {
         let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
         assert!(!r.has_position());
         let s = r.next_row().unwrap().unwrap().sample;
-        assert_eq!((s.t, s.force, s.velocity, s.acceleration), (4.0, 3.0, 2.0, 1.0));
+        assert_eq!(
+            (s.t, s.force, s.velocity, s.acceleration),
+            (4.0, 3.0, 2.0, 1.0)
+        );
         assert!(s.position.is_nan());
 
-        let err = TsvReader::new("t\tforce\tvelocity\n".as_bytes(), "f.tsv").err().unwrap();
-        assert!(err.to_string().contains("missing column `acceleration`"), "{err}");
-        let mut r = TsvReader::new("t\tforce\tvelocity\tacceleration\n1\t2\tabc\t4\n".as_bytes(), "f.tsv").unwrap();
+        let err = TsvReader::new("t\tforce\tvelocity\n".as_bytes(), "f.tsv")
+            .err()
+            .unwrap();
+        assert!(
+            err.to_string().contains("missing column `acceleration`"),
+            "{err}"
+        );
+        let mut r = TsvReader::new(
+            "t\tforce\tvelocity\tacceleration\n1\t2\tabc\t4\n".as_bytes(),
+            "f.tsv",
+        )
+        .unwrap();
         let err = r.next_row().err().unwrap().to_string();
-        assert!(err.contains("line 2") && err.contains("`velocity`") && err.contains("abc"), "{err}");
-        assert!(matches!(TsvReader::new(&b""[..], "e"), Err(TsvError::Empty { .. })));
+        assert!(
+            err.contains("line 2") && err.contains("`velocity`") && err.contains("abc"),
+            "{err}"
+        );
+        assert!(matches!(
+            TsvReader::new(&b""[..], "e"),
+            Err(TsvError::Empty { .. })
+        ));
     }
 }
