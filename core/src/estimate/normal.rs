@@ -266,7 +266,6 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             }
         }
         let sb: [T; N] = core::array::from_fn(|i| b[i] * d[i]);
-        let tol = T::from_f64(1e-9).unwrap_or(T::zero());
         let mut best: Option<([T; N], T, u32)> = None;
         for set in 0u32..(1 << M) {
             if set.count_ones() as usize > N {
@@ -275,11 +274,12 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             let Some(z) = kkt_solve::<T, N, M>(&s, &sb, &gs, &h, set) else {
                 continue;
             };
-            // Feasible (with a tolerance relative to the constraint's scale)?
+            // Feasible? Constraints in the active set hold by construction (up to rounding);
+            // the others must hold exactly, so a point a rounding error outside a bound loses to
+            // the point on it.
             let feasible = (0..M).all(|k| {
-                let lhs: T = (0..N).fold(T::zero(), |acc, i| acc + gs[k][i] * z[i]);
-                let scale = (0..N).fold(h[k].abs(), |acc, i| acc.max((gs[k][i] * z[i]).abs()));
-                lhs - h[k] <= tol * (scale + T::one())
+                set & (1 << k) != 0
+                    || (0..N).fold(T::zero(), |acc, i| acc + gs[k][i] * z[i]) <= h[k]
             });
             if !feasible {
                 continue;
