@@ -178,7 +178,8 @@ mod tests {
         for _ in 0..50_000 {
             l32.step(1e-4, 0.06);
         }
-        assert!((l32.velocity as f64 / want - 1.0).abs() < 1e-4);
+        // Near steady state the f32 increments fall below the rounding step of ω (~1e-4 rad/s).
+        assert!((l32.velocity as f64 / want - 1.0).abs() < 1e-3, "{}", l32.velocity);
     }
 
     #[test]
