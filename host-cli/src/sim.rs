@@ -1,10 +1,557 @@
-//! `propid sim` (not yet implemented).
+//! `propid sim`: a simulated test stand that writes the TSV `propid drive` would have recorded.
+//!
+//! ## How data flows
+//! ```text
+//!  Excitation (init at hi, then sine | steps | chirp)  ──► setpoint ∈ [−1, 1]
+//!  Drive: setpoint × max torque = commanded torque ──► [torque lag] ──► torque the load feels
+//!  Load (propid_core::plant): J, c1, c2, p, Coulomb, ripple  (+ an optional periodic disturbance)
+//!  Sensors, sampled at `rate` with timestamp jitter:
+//!    force        = commanded torque, or the felt torque through [force-sensor lag]   (+ noise)
+//!    velocity     = ω (+ noise);   acceleration = dω/dt through [acceleration lag] (+ noise)
+//!    position     = θ wrapped to [0, 2π)
+//!  ──► tsv::Row (ts_local, t, force, velocity, acceleration, position)
+//! ```
+//! Every effect `propid diagnose` looks for can be switched on with a magnitude, so tests can
+//! hide one in the data and check that diagnose finds it. [`Stand`] is a stepping object, so the
+//! same model also runs in real time behind a Cyphal node (`propid sim-drive`).
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use anyhow::Context;
+use propid_core::plant::{FirstOrderLag, Load, LoadParams};
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+
+use crate::tsv::{Row, Sample, TsvWriter};
+use crate::InputError;
+
+/// The shape of the setpoint after the init phase.
+#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum, serde::Serialize)]
+pub enum Pattern {
+    /// The seed's sinusoid between lo and hi.
+    Sine,
+    /// Steps between lo and hi, a staircase of 5 levels up and down, each held half a period.
+    Steps,
+    /// A sine sweep between lo and hi from 1/period to 10/period.
+    Chirp,
+}
+
+/// The excitation the driver applies (shared with `propid drive`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Excitation {
+    /// Low setpoint (ratiometric, −1..1).
+    pub lo: f64,
+    /// High setpoint.
+    pub hi: f64,
+    /// Period of the sinusoid [s].
+    pub period: f64,
+    /// Duration of the pattern after the init phase [s].
+    pub duration: f64,
+    /// Init phase at `hi` before the pattern [s].
+    pub init_duration: f64,
+    /// The pattern.
+    pub pattern: Pattern,
+}
+
+impl Excitation {
+    /// The setpoint `t` seconds after the pattern began (init phase excluded).
+    pub fn setpoint(&self, t: f64) -> f64 {
+        let (lo, hi) = (self.lo, self.hi);
+        let lerp = |s: f64| lo + (hi - lo) * (s + 1.0) / 2.0;
+        match self.pattern {
+            // The seed: np.interp(sin(now / (period / 2π)), (−1, 1), (lo, hi)).
+            Pattern::Sine => lerp((std::f64::consts::TAU * t / self.period).sin()),
+            Pattern::Steps => {
+                const LEVELS: [f64; 8] = [0.0, 0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25];
+                let k = (t / (self.period / 2.0)).floor().max(0.0) as usize % LEVELS.len();
+                lo + (hi - lo) * LEVELS[k]
+            }
+            Pattern::Chirp => {
+                let (f0, f1) = (1.0 / self.period, 10.0 / self.period);
+                let d = self.duration.max(1e-9);
+                let phase = std::f64::consts::TAU * (f0 * t + (f1 - f0) * t * t / (2.0 * d));
+                lerp(phase.sin())
+            }
+        }
+    }
+
+    /// Checks the values a user may get wrong.
+    pub fn validate(&self) -> Result<(), InputError> {
+        if !(self.lo < self.hi) || self.lo < -1.0 || self.hi > 1.0 {
+            return Err(InputError(format!(
+                "setpoint range must satisfy -1 ≤ lo < hi ≤ 1 (got lo = {}, hi = {})",
+                self.lo, self.hi
+            )));
+        }
+        if !(self.period > 0.0 && self.duration > 0.0 && self.init_duration >= 0.0) {
+            return Err(InputError(format!(
+                "period and duration must be positive and init duration non-negative (got {}, {}, {})",
+                self.period, self.duration, self.init_duration
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Everything about the simulated stand.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct StandConfig {
+    /// Inertia J [kg·m²].
+    pub inertia: f64,
+    /// Viscous friction c1 [N·m·s/rad].
+    pub c1: f64,
+    /// Drag coefficient c2 [N·m·s²/rad²] (at exponent 2).
+    pub c2: f64,
+    /// Drag exponent p.
+    pub drag_exponent: f64,
+    /// Coulomb friction [N·m].
+    pub coulomb: f64,
+    /// Torque ripple amplitude [N·m].
+    pub ripple: f64,
+    /// Ripple periods per revolution.
+    pub ripple_harmonic: f64,
+    /// Torque at setpoint 1 [N·m].
+    pub max_torque: f64,
+    /// Lag of the torque the load feels behind the commanded (and reported) torque [s].
+    pub torque_lag: f64,
+    /// Lag of the reported torque behind the torque the load feels [s].
+    pub force_sensor_lag: f64,
+    /// Lag of the reported acceleration behind the true one [s].
+    pub acceleration_lag: f64,
+    /// Amplitude of an external periodic torque disturbance [N·m] (not a modelled effect).
+    pub disturbance: f64,
+    /// Its frequency [Hz].
+    pub disturbance_hz: f64,
+    /// Feedback rate [Hz].
+    pub rate: f64,
+    /// Noise (standard deviation) on the reported torque [N·m].
+    pub noise_force: f64,
+    /// Noise on the reported velocity [rad/s].
+    pub noise_velocity: f64,
+    /// Noise on the reported acceleration [rad/s²].
+    pub noise_acceleration: f64,
+    /// Timestamp jitter of the sampling instants (standard deviation) [s].
+    pub jitter: f64,
+}
+
+impl Default for StandConfig {
+    /// A 7-inch propeller on a small outrunner, with realistic sensor noise and no hidden effect.
+    fn default() -> Self {
+        StandConfig {
+            inertia: 2.0e-5,
+            c1: 0.0,
+            c2: 1.5e-8,
+            drag_exponent: 2.0,
+            coulomb: 0.0,
+            ripple: 0.0,
+            ripple_harmonic: 6.0,
+            max_torque: 0.1,
+            torque_lag: 0.0,
+            force_sensor_lag: 0.0,
+            acceleration_lag: 0.0,
+            disturbance: 0.0,
+            disturbance_hz: 7.0,
+            rate: 500.0,
+            noise_force: 2e-4,
+            noise_velocity: 0.5,
+            noise_acceleration: 20.0,
+            jitter: 50e-6,
+        }
+    }
+}
+
+impl StandConfig {
+    /// The load parameters for the core model.
+    pub fn load_params(&self) -> LoadParams<f64> {
+        LoadParams {
+            inertia: self.inertia,
+            c1: self.c1,
+            c2: self.c2,
+            drag_exponent: self.drag_exponent,
+            coulomb: self.coulomb,
+            ripple_amplitude: self.ripple,
+            ripple_harmonic: self.ripple_harmonic,
+            ripple_phase: 0.3,
+        }
+    }
+}
+
+/// Internal integration step [s].
+const DT: f64 = 5e-5;
+
+/// The simulated stand: feed it setpoints, advance time, read what the drive would report.
+pub struct Stand {
+    config: StandConfig,
+    load: Load<f64>,
+    /// Time since start [s].
+    time: f64,
+    setpoint: f64,
+    torque_actuator: FirstOrderLag<f64>,
+    force_sensor: FirstOrderLag<f64>,
+    acceleration_sensor: FirstOrderLag<f64>,
+    rng: StdRng,
+}
+
+fn normal(sigma: f64) -> Normal<f64> {
+    Normal::new(0.0, sigma.max(0.0)).unwrap_or_else(|_| Normal::new(0.0, 0.0).expect("zero sigma"))
+}
+
+impl Stand {
+    /// A stand at rest with the given configuration and noise seed.
+    pub fn new(config: StandConfig, seed: u64) -> Self {
+        Stand {
+            load: Load::new(config.load_params(), 0.0),
+            time: 0.0,
+            setpoint: 0.0,
+            torque_actuator: FirstOrderLag::new(config.torque_lag, 0.0),
+            force_sensor: FirstOrderLag::new(config.force_sensor_lag, 0.0),
+            acceleration_sensor: FirstOrderLag::new(config.acceleration_lag, 0.0),
+            rng: StdRng::seed_from_u64(seed),
+            config,
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &StandConfig {
+        &self.config
+    }
+
+    /// Sets the ratiometric setpoint (clamped to [−1, 1]; NaN reads as 0).
+    pub fn set_setpoint(&mut self, setpoint: f64) {
+        self.setpoint = if setpoint.is_nan() { 0.0 } else { setpoint.clamp(-1.0, 1.0) };
+    }
+
+    /// Seconds since the start.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// True velocity [rad/s].
+    pub fn velocity(&self) -> f64 {
+        self.load.velocity
+    }
+
+    /// The torque the motor produces (the command, through the torque lag if any).
+    fn motor_torque(&self) -> f64 {
+        if self.config.torque_lag > 0.0 {
+            self.torque_actuator.value
+        } else {
+            self.setpoint * self.config.max_torque
+        }
+    }
+
+    /// The torque the load feels: the motor's plus the external disturbance.
+    fn felt_torque(&self) -> f64 {
+        let c = &self.config;
+        let disturbance = if c.disturbance != 0.0 {
+            c.disturbance * (std::f64::consts::TAU * c.disturbance_hz * self.time).sin()
+        } else {
+            0.0
+        };
+        self.motor_torque() + disturbance
+    }
+
+    /// Advances the simulation to `t` seconds since the start.
+    pub fn advance_to(&mut self, t: f64) {
+        while self.time + 1e-12 < t {
+            let dt = DT.min(t - self.time);
+            let command = self.setpoint * self.config.max_torque;
+            self.torque_actuator.step(dt, command);
+            self.force_sensor.step(dt, self.motor_torque());
+            let felt = self.felt_torque();
+            let a = self.load.acceleration(felt);
+            self.acceleration_sensor.step(dt, a);
+            self.load.step(dt, felt);
+            self.time += dt;
+        }
+    }
+
+    /// What the drive reports now (noise drawn afresh).
+    pub fn measure(&mut self) -> Sample {
+        let c = self.config;
+        let command = self.setpoint * c.max_torque;
+        let force = if c.force_sensor_lag > 0.0 {
+            self.force_sensor.value
+        } else {
+            command
+        };
+        let acceleration = if c.acceleration_lag > 0.0 {
+            self.acceleration_sensor.value
+        } else {
+            self.load.acceleration(self.felt_torque())
+        };
+        let r = &mut self.rng;
+        Sample {
+            t: self.time,
+            force: force + normal(c.noise_force).sample(r),
+            velocity: self.load.velocity + normal(c.noise_velocity).sample(r),
+            acceleration: acceleration + normal(c.noise_acceleration).sample(r),
+            position: self.load.position.rem_euclid(std::f64::consts::TAU),
+        }
+    }
+
+    /// Runs the excitation (init phase not recorded, like the driver) and calls `sink` with each
+    /// recorded row.
+    pub fn run(
+        &mut self,
+        excitation: &Excitation,
+        mut sink: impl FnMut(Row) -> anyhow::Result<()>,
+    ) -> anyhow::Result<u64> {
+        let c = self.config;
+        let start = self.time + excitation.init_duration;
+        self.set_setpoint(excitation.hi);
+        self.advance_to(start);
+        let jitter = normal(c.jitter);
+        let n = (excitation.duration * c.rate).floor() as u64;
+        for k in 0..n {
+            let nominal = k as f64 / c.rate;
+            let dt_jitter = jitter.sample(&mut self.rng).clamp(-0.4 / c.rate, 0.4 / c.rate);
+            let t = (nominal + dt_jitter).max(0.0);
+            // The setpoint is updated by the driver faster than the feedback: evaluate it at t.
+            self.set_setpoint(excitation.setpoint(t));
+            self.advance_to(start + t);
+            let mut sample = self.measure();
+            sample.t = t;
+            let delay = 0.002 + jitter.sample(&mut self.rng).abs();
+            sink(Row {
+                ts_local: 1000.0 + t + delay,
+                sample,
+            })?;
+        }
+        Ok(n)
+    }
+}
+
+/// Simulates `excitation` on a stand and returns the recorded samples.
+pub fn simulate(config: StandConfig, excitation: &Excitation, seed: u64) -> Vec<Sample> {
+    let mut out = Vec::new();
+    let mut stand = Stand::new(config, seed);
+    // The sink never fails.
+    let _ = stand.run(excitation, |row| {
+        out.push(row.sample);
+        Ok(())
+    });
+    out
+}
 
 /// Arguments of `propid sim`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Output TSV (standard output if omitted).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Random seed for the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Inertia J [kg·m²].
+    #[arg(long, default_value_t = StandConfig::default().inertia)]
+    pub inertia: f64,
+    /// Viscous friction c1 [N·m·s/rad] (hidden effect `viscous_friction`).
+    #[arg(long, default_value_t = 0.0)]
+    pub c1: f64,
+    /// Drag coefficient c2 [N·m·s²/rad²].
+    #[arg(long, default_value_t = StandConfig::default().c2)]
+    pub c2: f64,
+    /// Drag exponent p (hidden effect `drag_exponent` when ≠ 2).
+    #[arg(long, default_value_t = 2.0)]
+    pub drag_exponent: f64,
+    /// Coulomb friction [N·m] (hidden effect `coulomb_friction`).
+    #[arg(long, default_value_t = 0.0)]
+    pub coulomb: f64,
+    /// Torque ripple amplitude [N·m] (hidden effect `torque_ripple`).
+    #[arg(long, default_value_t = 0.0)]
+    pub ripple: f64,
+    /// Ripple periods per revolution.
+    #[arg(long, default_value_t = 6.0)]
+    pub ripple_harmonic: f64,
+    /// Torque at setpoint 1 [N·m].
+    #[arg(long, default_value_t = StandConfig::default().max_torque)]
+    pub max_torque: f64,
+    /// Lag of the felt torque behind the reported one [s] (hidden effect `torque_lag`).
+    #[arg(long, default_value_t = 0.0)]
+    pub torque_lag: f64,
+    /// Lag of the reported torque behind the felt one [s] (hidden effect `force_sensor_lag`).
+    #[arg(long, default_value_t = 0.0)]
+    pub force_sensor_lag: f64,
+    /// Lag of the reported acceleration [s] (hidden effect `acceleration_lag`).
+    #[arg(long, default_value_t = 0.0)]
+    pub acceleration_lag: f64,
+    /// Amplitude of a periodic external torque [N·m] (not a modelled effect: "unexplained").
+    #[arg(long, default_value_t = 0.0)]
+    pub disturbance: f64,
+    /// Frequency of the disturbance [Hz].
+    #[arg(long, default_value_t = 7.0)]
+    pub disturbance_hz: f64,
+    /// Feedback rate [Hz].
+    #[arg(long, default_value_t = 500.0)]
+    pub rate: f64,
+    /// Torque noise [N·m].
+    #[arg(long, default_value_t = StandConfig::default().noise_force)]
+    pub noise_force: f64,
+    /// Velocity noise [rad/s].
+    #[arg(long, default_value_t = StandConfig::default().noise_velocity)]
+    pub noise_velocity: f64,
+    /// Acceleration noise [rad/s²].
+    #[arg(long, default_value_t = StandConfig::default().noise_acceleration)]
+    pub noise_acceleration: f64,
+    /// Sampling-time jitter [s].
+    #[arg(long, default_value_t = StandConfig::default().jitter)]
+    pub jitter: f64,
+    /// Low setpoint.
+    #[arg(long, default_value_t = 0.1)]
+    pub lo: f64,
+    /// High setpoint.
+    #[arg(long, default_value_t = 0.9)]
+    pub hi: f64,
+    /// Period of the sinusoid [s].
+    #[arg(long, default_value_t = 2.0)]
+    pub period: f64,
+    /// Duration of the pattern [s].
+    #[arg(long, default_value_t = 60.0)]
+    pub duration: f64,
+    /// Init phase at the high setpoint [s].
+    #[arg(long, default_value_t = 5.0)]
+    pub init_duration: f64,
+    /// Pattern after the init phase.
+    #[arg(long, value_enum, default_value_t = Pattern::Sine)]
+    pub pattern: Pattern,
+}
+
+impl Args {
+    /// The stand configuration these arguments describe.
+    pub fn config(&self) -> StandConfig {
+        StandConfig {
+            inertia: self.inertia,
+            c1: self.c1,
+            c2: self.c2,
+            drag_exponent: self.drag_exponent,
+            coulomb: self.coulomb,
+            ripple: self.ripple,
+            ripple_harmonic: self.ripple_harmonic,
+            max_torque: self.max_torque,
+            torque_lag: self.torque_lag,
+            force_sensor_lag: self.force_sensor_lag,
+            acceleration_lag: self.acceleration_lag,
+            disturbance: self.disturbance,
+            disturbance_hz: self.disturbance_hz,
+            rate: self.rate,
+            noise_force: self.noise_force,
+            noise_velocity: self.noise_velocity,
+            noise_acceleration: self.noise_acceleration,
+            jitter: self.jitter,
+        }
+    }
+
+    /// The excitation these arguments describe.
+    pub fn excitation(&self) -> Excitation {
+        Excitation {
+            lo: self.lo,
+            hi: self.hi,
+            period: self.period,
+            duration: self.duration,
+            init_duration: self.init_duration,
+            pattern: self.pattern,
+        }
+    }
+}
 
 /// Runs `propid sim`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("propid sim is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let config = args.config();
+    let excitation = args.excitation();
+    excitation.validate()?;
+    let positive = [
+        ("--inertia", config.inertia),
+        ("--rate", config.rate),
+        ("--max-torque", config.max_torque),
+        ("--drag-exponent", config.drag_exponent),
+    ];
+    for (name, v) in positive {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(InputError(format!("{name} must be positive (got {v})")).into());
+        }
+    }
+    let non_negative = [
+        ("--c1", config.c1),
+        ("--c2", config.c2),
+        ("--coulomb", config.coulomb),
+        ("--torque-lag", config.torque_lag),
+        ("--force-sensor-lag", config.force_sensor_lag),
+        ("--acceleration-lag", config.acceleration_lag),
+        ("--noise-force", config.noise_force),
+        ("--noise-velocity", config.noise_velocity),
+        ("--noise-acceleration", config.noise_acceleration),
+        ("--jitter", config.jitter),
+    ];
+    for (name, v) in non_negative {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(InputError(format!("{name} must be ≥ 0 (got {v})")).into());
+        }
+    }
+    let out: Box<dyn Write> = match &args.output {
+        Some(p) => Box::new(std::io::BufWriter::new(
+            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
+        )),
+        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    };
+    let mut writer = TsvWriter::new(out, false)?;
+    let mut stand = Stand::new(config, args.seed);
+    let rows = stand.run(&excitation, |row| Ok(writer.write(&row)?))?;
+    writer.into_inner()?;
+    eprintln!("simulated {rows} rows ({} s at {} Hz)", excitation.duration, config.rate);
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn excitation(duration: f64) -> Excitation {
+        Excitation {
+            lo: 0.1,
+            hi: 0.9,
+            period: 2.0,
+            duration,
+            init_duration: 2.0,
+            pattern: Pattern::Sine,
+        }
+    }
+
+    #[test]
+    fn noiseless_samples_obey_the_load_equation() {
+        let config = StandConfig {
+            noise_force: 0.0,
+            noise_velocity: 0.0,
+            noise_acceleration: 0.0,
+            jitter: 0.0,
+            ..StandConfig::default()
+        };
+        let s = simulate(config, &excitation(4.0), 1);
+        assert_eq!(s.len(), 2000);
+        for x in &s {
+            let a = (x.force - config.c2 * x.velocity * x.velocity) / config.inertia;
+            assert!((a - x.acceleration).abs() < 1e-6 * a.abs().max(1.0), "{x:?}");
+        }
+        // The seed's setpoint formula: t = 0 is the middle of the range.
+        assert!((s[0].force - 0.05).abs() < 1e-12);
+        let top = s.iter().map(|x| x.force).fold(0.0, f64::max);
+        assert!((top - 0.09).abs() < 1e-6);
+    }
+
+    #[test]
+    fn same_seed_same_data_and_patterns_stay_in_range() {
+        let a = simulate(StandConfig::default(), &excitation(1.0), 7);
+        let b = simulate(StandConfig::default(), &excitation(1.0), 7);
+        assert_eq!(a, b);
+        for pattern in [Pattern::Sine, Pattern::Steps, Pattern::Chirp] {
+            let e = Excitation { pattern, ..excitation(30.0) };
+            for k in 0..3000 {
+                let sp = e.setpoint(k as f64 * 0.01);
+                assert!((0.1 - 1e-12..=0.9 + 1e-12).contains(&sp), "{pattern:?} {sp}");
+            }
+        }
+        assert!(Excitation { lo: 0.5, hi: 0.4, ..excitation(1.0) }.validate().is_err());
+    }
 }
