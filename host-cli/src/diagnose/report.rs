@@ -1,0 +1,125 @@
+//! The diagnosis as text and as plots.
+
+use super::Report;
+use crate::plot::{Figure, Panel, Series, Style};
+
+/// A readable report.
+pub fn to_text(r: &Report, source: &str) -> String {
+    let mut s = String::new();
+    let b = &r.base;
+    s += &format!(
+        "propid diagnose {source}: {} samples over {:.1} s at {:.0} Hz\n\n",
+        r.samples, r.duration_s, r.rate_hz
+    );
+    s += "1. Base model (the seed's): J·dω/dt = F − c2·ω|ω|, c1 = 0\n";
+    s += &format!(
+        "   J  = {:.4e} ± {:.1e} kg·m²\n   c2 = {:.4e} ± {:.1e} N·m·s²/rad²\n",
+        b.mass, b.mass_stderr, b.c2, b.c2_stderr
+    );
+    s += &format!(
+        "   What the simulation gets wrong: simulated open-loop from the measured force, its velocity\n   \
+         misses the measured one by {:.3} rad/s RMS on the held-out last 30 % of the data.\n\n",
+        r.simulation_rms.base
+    );
+    s += "2. Residual of the base model, correlation with:\n";
+    for (name, c) in &r.residual_analysis.correlations {
+        s += &format!("   {name:<26} {c:+.3}\n");
+    }
+    s += &format!(
+        "   dominant frequency {:.3} Hz ({:.0}× the median of the spectrum)\n\n",
+        r.residual_analysis.dominant_frequency_hz, r.residual_analysis.peak_to_median
+    );
+    s += "3. Candidate effects (gain = held-out acceleration error, blocked 5-fold cross-validation):\n";
+    for c in &r.candidates {
+        s += &format!(
+            "   {:<18} gain {:+7.2} %  better in {}/5 folds  simulation {:+6.1} %  value {:+.4e}  {}\n",
+            c.name,
+            c.cv_gain_percent,
+            c.folds_better,
+            c.simulation_gain_percent,
+            c.value,
+            if c.selected { "← named".to_string() } else { c.note.clone() }
+        );
+    }
+    s += "\n4. Verdict\n";
+    if r.effects.is_empty() && r.unexplained.is_none() {
+        s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
+    }
+    for e in &r.effects {
+        s += &format!(
+            "   {}: {} = {:.4e} ± {:.1e} {}\n     {}\n     alone it improves the simulated velocity by {:.1} % on held-out data\n",
+            e.name, e.name, e.value, e.stderr, e.unit, e.explanation, e.gain_percent
+        );
+    }
+    if !r.effects.is_empty() {
+        let x = &r.extended;
+        s += &format!(
+            "   Extended model: J = {:.4e} ± {:.1e} kg·m², c1 = {:.3e}, c2 = {:.4e} ± {:.1e}\n",
+            x.mass, x.mass_stderr, x.c1, x.c2, x.c2_stderr
+        );
+    }
+    s += &format!(
+        "   Simulated-velocity RMS error on held-out data: base {:.3} → extended {:.3} rad/s (gain {:.1} %)\n",
+        r.simulation_rms.base, r.simulation_rms.extended, r.simulation_rms.gain_percent
+    );
+    match &r.unexplained {
+        Some(u) => s += &format!("   Unexplained: {}\n", u.description),
+        None => s += "   Unexplained: nothing (no periodic structure left in the residual)\n",
+    }
+    for n in &r.notes {
+        s += &format!("   Note: {n}\n");
+    }
+    s
+}
+
+/// The plots: measured vs simulated velocity (base and extended) on the held-out data, and the
+/// acceleration residuals.
+pub fn figure(r: &Report) -> Figure {
+    let tr = &r.traces;
+    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+    let ext = if names.is_empty() { "extended (= base)".to_string() } else { format!("base + {}", names.join(" + ")) };
+    Figure {
+        title: format!(
+            "propid diagnose: simulated-velocity RMS {:.3} → {:.3} rad/s ({:+.1} %)",
+            r.simulation_rms.base, r.simulation_rms.extended, -r.simulation_rms.gain_percent
+        ),
+        x_label: "t [s]".into(),
+        panels: vec![
+            Panel {
+                title: "held-out data: measured velocity vs open-loop simulation".into(),
+                y_label: "ω [rad/s]".into(),
+                series: vec![
+                    Series { name: "measured".into(), x: tr.t.clone(), y: tr.measured.clone(), style: Style::Points },
+                    Series { name: "base model".into(), x: tr.t.clone(), y: tr.base.clone(), style: Style::Line },
+                    Series { name: ext.clone(), x: tr.t.clone(), y: tr.extended.clone(), style: Style::Line },
+                ],
+            },
+            Panel {
+                title: "simulation error (simulated − measured)".into(),
+                y_label: "Δω [rad/s]".into(),
+                series: vec![
+                    Series {
+                        name: "base model".into(),
+                        x: tr.t.clone(),
+                        y: tr.base.iter().zip(&tr.measured).map(|(a, b)| a - b).collect(),
+                        style: Style::Line,
+                    },
+                    Series {
+                        name: ext,
+                        x: tr.t.clone(),
+                        y: tr.extended.iter().zip(&tr.measured).map(|(a, b)| a - b).collect(),
+                        style: Style::Line,
+                    },
+                ],
+            },
+            Panel {
+                title: "acceleration residual (all data)".into(),
+                y_label: "[rad/s²]".into(),
+                series: vec![
+                    Series { name: "base model".into(), x: tr.t_all.clone(), y: tr.residual_base.clone(), style: Style::Points },
+                    Series { name: "extended model".into(), x: tr.t_all.clone(), y: tr.residual_extended.clone(), style: Style::Points },
+                ],
+            },
+        ],
+    }
+}

@@ -1,0 +1,147 @@
+//! The measured signals and the derived ones every candidate effect draws on.
+
+use crate::tsv::Sample;
+use crate::InputError;
+
+/// Half-width of the derivative window [s]: Ḟ and ȧ are local straight-line slopes over ±this.
+const DERIVATIVE_HALF_WINDOW: f64 = 0.01;
+
+/// Columns of a recording, plus derivatives.
+pub struct Signals {
+    /// Time [s].
+    pub t: Vec<f64>,
+    /// Reported torque [N·m].
+    pub force: Vec<f64>,
+    /// Velocity [rad/s].
+    pub velocity: Vec<f64>,
+    /// Reported acceleration [rad/s²].
+    pub acceleration: Vec<f64>,
+    /// Rotor angle [rad], if the recording has it.
+    pub position: Option<Vec<f64>>,
+    /// dF/dt, the local slope over ±10 ms [N·m/s].
+    pub force_rate: Vec<f64>,
+    /// d(acceleration)/dt, the same way [rad/s³].
+    pub jerk: Vec<f64>,
+    /// Median sample rate [Hz].
+    pub rate: f64,
+    /// First sample the regressions use: the first half second is a warm-up for the lag filters
+    /// of the candidate models (their initial state is unknown), so every model is judged on the
+    /// same samples.
+    pub first: usize,
+}
+
+/// The slope of a straight line fitted by least squares to the samples within ±`h` of each one
+/// (a Savitzky–Golay first derivative): zero phase, and much less noisy than a two-point
+/// difference over the same span.
+fn local_slope(t: &[f64], x: &[f64], h: usize) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            let (lo, hi) = (i.saturating_sub(h), (i + h).min(n - 1));
+            let m = (hi - lo + 1) as f64;
+            let tm = t[lo..=hi].iter().sum::<f64>() / m;
+            let xm = x[lo..=hi].iter().sum::<f64>() / m;
+            let (mut sxy, mut sxx) = (0.0, 0.0);
+            for k in lo..=hi {
+                sxy += (t[k] - tm) * (x[k] - xm);
+                sxx += (t[k] - tm) * (t[k] - tm);
+            }
+            if sxx > 0.0 {
+                sxy / sxx
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+impl Signals {
+    /// Builds the signals; the samples must be complete (finite t, force, velocity,
+    /// acceleration) and in time order.
+    pub fn new(samples: &[Sample]) -> Result<Signals, InputError> {
+        const MIN_SAMPLES: usize = 200;
+        if samples.len() < MIN_SAMPLES {
+            return Err(InputError(format!(
+                "{} complete samples; a diagnosis needs at least {MIN_SAMPLES}",
+                samples.len()
+            )));
+        }
+        if let Some(k) = samples.windows(2).position(|w| w[1].t < w[0].t) {
+            return Err(InputError(format!(
+                "time goes backwards at sample {} (t = {} after {})",
+                k + 2,
+                samples[k + 1].t,
+                samples[k].t
+            )));
+        }
+        let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
+        let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).collect();
+        if dts.is_empty() {
+            return Err(InputError("all samples have the same time".into()));
+        }
+        dts.sort_by(f64::total_cmp);
+        let rate = 1.0 / dts[dts.len() / 2];
+        let force: Vec<f64> = samples.iter().map(|s| s.force).collect();
+        let acceleration: Vec<f64> = samples.iter().map(|s| s.acceleration).collect();
+        let h = ((DERIVATIVE_HALF_WINDOW * rate).round() as usize).max(1);
+        let position = samples
+            .iter()
+            .all(|s| s.position.is_finite())
+            .then(|| samples.iter().map(|s| s.position).collect());
+        let warm_up = t[0] + 0.5;
+        let first = t.iter().position(|x| *x >= warm_up).unwrap_or(0).min(t.len() / 2);
+        Ok(Signals {
+            first,
+            force_rate: local_slope(&t, &force, h),
+            jerk: local_slope(&t, &acceleration, h),
+            velocity: samples.iter().map(|s| s.velocity).collect(),
+            t,
+            force,
+            acceleration,
+            position,
+            rate,
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+
+    /// The reported torque through a causal first-order lag of time constant `lag`.
+    pub fn lagged_force(&self, lag: f64) -> Vec<f64> {
+        let mut y = self.force[0];
+        let mut out = Vec::with_capacity(self.len());
+        for i in 0..self.len() {
+            if i > 0 && lag > 0.0 {
+                let dt = self.t[i] - self.t[i - 1];
+                y += (1.0 - (-dt / lag).exp()) * (self.force[i] - y);
+            } else if lag <= 0.0 {
+                y = self.force[i];
+            }
+            out.push(y);
+        }
+        out
+    }
+}
+
+/// Pearson correlation (0 if either side is constant).
+pub fn correlation(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len().min(y.len()) as f64;
+    if n < 2.0 {
+        return 0.0;
+    }
+    let mx = x.iter().sum::<f64>() / n;
+    let my = y.iter().sum::<f64>() / n;
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in x.iter().zip(y) {
+        sxy += (a - mx) * (b - my);
+        sxx += (a - mx) * (a - mx);
+        syy += (b - my) * (b - my);
+    }
+    if sxx <= 0.0 || syy <= 0.0 {
+        0.0
+    } else {
+        sxy / (sxx * syy).sqrt()
+    }
+}
