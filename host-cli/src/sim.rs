@@ -79,7 +79,12 @@ impl Excitation {
 
     /// Checks the values a user may get wrong.
     pub fn validate(&self) -> Result<(), InputError> {
-        if !(self.lo < self.hi) || self.lo < -1.0 || self.hi > 1.0 {
+        if self.lo.is_nan()
+            || self.hi.is_nan()
+            || self.lo >= self.hi
+            || self.lo < -1.0
+            || self.hi > 1.0
+        {
             return Err(InputError(format!(
                 "setpoint range must satisfy -1 ≤ lo < hi ≤ 1 (got lo = {}, hi = {})",
                 self.lo, self.hi
@@ -220,7 +225,11 @@ impl Stand {
 
     /// Sets the ratiometric setpoint (clamped to [−1, 1]; NaN reads as 0).
     pub fn set_setpoint(&mut self, setpoint: f64) {
-        self.setpoint = if setpoint.is_nan() { 0.0 } else { setpoint.clamp(-1.0, 1.0) };
+        self.setpoint = if setpoint.is_nan() {
+            0.0
+        } else {
+            setpoint.clamp(-1.0, 1.0)
+        };
     }
 
     /// Seconds since the start.
@@ -307,7 +316,9 @@ impl Stand {
         let n = (excitation.duration * c.rate).floor() as u64;
         for k in 0..n {
             let nominal = k as f64 / c.rate;
-            let dt_jitter = jitter.sample(&mut self.rng).clamp(-0.4 / c.rate, 0.4 / c.rate);
+            let dt_jitter = jitter
+                .sample(&mut self.rng)
+                .clamp(-0.4 / c.rate, 0.4 / c.rate);
             let t = (nominal + dt_jitter).max(0.0);
             // The setpoint is updated by the driver faster than the feedback: evaluate it at t.
             self.set_setpoint(excitation.setpoint(t));
@@ -500,7 +511,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut stand = Stand::new(config, args.seed);
     let rows = stand.run(&excitation, |row| Ok(writer.write(&row)?))?;
     writer.into_inner()?;
-    eprintln!("simulated {rows} rows ({} s at {} Hz)", excitation.duration, config.rate);
+    eprintln!(
+        "simulated {rows} rows ({} s at {} Hz)",
+        excitation.duration, config.rate
+    );
     Ok(())
 }
 
@@ -532,7 +546,10 @@ mod tests {
         assert_eq!(s.len(), 2000);
         for x in &s {
             let a = (x.force - config.c2 * x.velocity * x.velocity) / config.inertia;
-            assert!((a - x.acceleration).abs() < 1e-6 * a.abs().max(1.0), "{x:?}");
+            assert!(
+                (a - x.acceleration).abs() < 1e-6 * a.abs().max(1.0),
+                "{x:?}"
+            );
         }
         // The seed's setpoint formula: t = 0 is the middle of the range.
         assert!((s[0].force - 0.05).abs() < 1e-12);
@@ -546,12 +563,24 @@ mod tests {
         let b = simulate(StandConfig::default(), &excitation(1.0), 7);
         assert_eq!(a, b);
         for pattern in [Pattern::Sine, Pattern::Steps, Pattern::Chirp] {
-            let e = Excitation { pattern, ..excitation(30.0) };
+            let e = Excitation {
+                pattern,
+                ..excitation(30.0)
+            };
             for k in 0..3000 {
                 let sp = e.setpoint(k as f64 * 0.01);
-                assert!((0.1 - 1e-12..=0.9 + 1e-12).contains(&sp), "{pattern:?} {sp}");
+                assert!(
+                    (0.1 - 1e-12..=0.9 + 1e-12).contains(&sp),
+                    "{pattern:?} {sp}"
+                );
             }
         }
-        assert!(Excitation { lo: 0.5, hi: 0.4, ..excitation(1.0) }.validate().is_err());
+        assert!(Excitation {
+            lo: 0.5,
+            hi: 0.4,
+            ..excitation(1.0)
+        }
+        .validate()
+        .is_err());
     }
 }

@@ -171,15 +171,27 @@ mod tests {
             load.step(1e-4, 0.06);
         }
         let want = (0.06f64 / 1.5e-8).sqrt();
-        assert!((load.velocity / want - 1.0).abs() < 1e-6, "{}", load.velocity);
-        assert!(load.acceleration(0.06).abs() < 0.1, "at rest: {}", load.acceleration(0.06));
+        assert!(
+            (load.velocity / want - 1.0).abs() < 1e-6,
+            "{}",
+            load.velocity
+        );
+        assert!(
+            load.acceleration(0.06).abs() < 0.1,
+            "at rest: {}",
+            load.acceleration(0.06)
+        );
         // The same in f32 (the firmware's arithmetic).
         let mut l32 = Load::new(LoadParams::propeller(2e-5f32, 1.5e-8), 0.0);
         for _ in 0..50_000 {
             l32.step(1e-4, 0.06);
         }
         // Near steady state the f32 increments fall below the rounding step of ω (~1e-4 rad/s).
-        assert!((l32.velocity as f64 / want - 1.0).abs() < 1e-3, "{}", l32.velocity);
+        assert!(
+            (l32.velocity as f64 / want - 1.0).abs() < 1e-3,
+            "{}",
+            l32.velocity
+        );
     }
 
     #[test]

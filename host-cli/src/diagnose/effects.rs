@@ -19,7 +19,7 @@ use propid_core::estimate::NormalEquations;
 use super::signals::{correlation, Signals};
 use super::{
     BaseModel, CandidateScore, NamedEffect, Options, Report, ResidualAnalysis, SimulationRms,
-    Traces, Unexplained, FOLDS, HOLDOUT, MIN_FOLDS_BETTER, MIN_GAIN, MAX_SIM_LOSS,
+    Traces, Unexplained, FOLDS, HOLDOUT, MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
 use crate::InputError;
 
@@ -73,7 +73,9 @@ impl EffectKind {
     /// The unit of its parameter.
     pub fn unit(self) -> &'static str {
         match self {
-            EffectKind::CoulombFriction | EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => "N·m",
+            EffectKind::CoulombFriction
+            | EffectKind::TorqueRipple
+            | EffectKind::PeriodicDisturbance => "N·m",
             EffectKind::ViscousFriction => "N·m·s/rad",
             EffectKind::DragExponent => "1",
             EffectKind::TorqueLag | EffectKind::ForceSensorLag | EffectKind::AccelerationLag => "s",
@@ -163,7 +165,13 @@ impl Model {
         step: f64,
     ) -> [f64; MAX_COLUMNS] {
         let mut r = [0.0; MAX_COLUMNS];
-        let sgn = if omega > 0.0 { 1.0 } else if omega < 0.0 { -1.0 } else { 0.0 };
+        let sgn = if omega > 0.0 {
+            1.0
+        } else if omega < 0.0 {
+            -1.0
+        } else {
+            0.0
+        };
         r[0] = p.force[i];
         r[1] = if p.exponent == 2.0 {
             -omega * omega.abs()
@@ -237,7 +245,12 @@ fn accumulate<const N: usize>(
     eqs
 }
 
-fn fit_n<const N: usize>(model: &Model, p: &Prepared, s: &Signals, range: Range<usize>) -> Option<Fit> {
+fn fit_n<const N: usize>(
+    model: &Model,
+    p: &Prepared,
+    s: &Signals,
+    range: Range<usize>,
+) -> Option<Fit> {
     let eq = accumulate::<N>(model, p, s, range, 1).pop()?;
     let sol = eq.solve().ok()?;
     Some(Fit {
@@ -265,7 +278,10 @@ fn cv_n<const N: usize>(model: &Model, p: &Prepared, s: &Signals) -> Option<Cv> 
         total += rss;
         count += eqs[k].count();
     }
-    Some(Cv { mse: total / count.max(1.0), folds })
+    Some(Cv {
+        mse: total / count.max(1.0),
+        folds,
+    })
 }
 
 macro_rules! by_columns {
@@ -303,7 +319,11 @@ fn simulate(model: &Model, theta: &[f64], s: &Signals, range: Range<usize>) -> V
     let k0 = (start + 5).min(range.end);
     let mut w = s.velocity[start..k0].iter().sum::<f64>() / (k0 - start).max(1) as f64;
     let accel = |i: usize, w: f64| -> f64 {
-        let step = if i + 1 < s.len() { s.t[i + 1] - s.t[i] } else { 0.0 };
+        let step = if i + 1 < s.len() {
+            s.t[i + 1] - s.t[i]
+        } else {
+            0.0
+        };
         let r = model.row(&p, s, i, w, true, step);
         theta.iter().zip(r).map(|(a, b)| a * b).sum()
     };
@@ -351,7 +371,11 @@ fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iterations: usize) -
             f2 = f(x2);
         }
     }
-    if f1 < f2 { x1 } else { x2 }
+    if f1 < f2 {
+        x1
+    } else {
+        x2
+    }
 }
 
 /// Chooses the nonlinear parameter of `kind` added to `model` by the held-out error: a grid,
@@ -383,12 +407,15 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
 /// `index` among the model's effects), with its standard error.
 fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f64) {
     let e = model.effects[index];
-    let col = 2 + model.effects[..index].iter().map(|e| e.kind.columns()).sum::<usize>();
+    let col = 2 + model.effects[..index]
+        .iter()
+        .map(|e| e.kind.columns())
+        .sum::<usize>();
     let t0 = fit.theta[0];
     match e.kind {
-        EffectKind::CoulombFriction
-        | EffectKind::ViscousFriction
-        | EffectKind::ForceSensorLag => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
+        EffectKind::CoulombFriction | EffectKind::ViscousFriction | EffectKind::ForceSensorLag => {
+            (fit.theta[col] / t0, fit.stderr[col] / t0.abs())
+        }
         EffectKind::AccelerationLag => (fit.theta[col], fit.stderr[col]),
         EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => {
             let (a, b) = (fit.theta[col], fit.theta[col + 1]);
@@ -408,7 +435,11 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
             let (r0, rp, rm) = (fit.rss, rss(q + h), rss((q - h).max(1e-6)));
             let curvature = (rp - 2.0 * r0 + rm) / (h * h);
             let sigma2 = fit.rss / (fit.n - fit.theta.len() as f64 - 1.0).max(1.0);
-            let se = if curvature > 0.0 { (2.0 * sigma2 / curvature).sqrt() } else { f64::NAN };
+            let se = if curvature > 0.0 {
+                (2.0 * sigma2 / curvature).sqrt()
+            } else {
+                f64::NAN
+            };
             (q, se)
         }
     }
@@ -508,8 +539,17 @@ fn periodogram(s: &Signals, r: &[f64]) -> (f64, f64) {
     let mut sorted: Vec<f64> = powers.iter().map(|p| p.1).collect();
     sorted.sort_by(f64::total_cmp);
     let median = sorted[sorted.len() / 2].max(f64::MIN_POSITIVE);
-    let peak = powers.iter().copied().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or((0.0, 0.0));
-    let f = golden(peak.0 - df, peak.0 + df, |f| -power_at(r, mean, s.rate, f), 20);
+    let peak = powers
+        .iter()
+        .copied()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or((0.0, 0.0));
+    let f = golden(
+        peak.0 - df,
+        peak.0 + df,
+        |f| -power_at(r, mean, s.rate, f),
+        20,
+    );
     let p = power_at(r, mean, s.rate, f).max(peak.1);
     (f, p / median)
 }
@@ -539,7 +579,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         )
     };
     let base_fit = fit_on_all(&base, s).ok_or_else(unfit)?;
-    if !(base_fit.theta[0] > 0.0) {
+    if base_fit.theta[0].is_nan() || base_fit.theta[0] <= 0.0 {
         return Err(InputError(
             "the fitted inertia is not positive: force and acceleration do not move together (check signs and units)".into(),
         ));
@@ -605,8 +645,8 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     let mut current = cross_validate(&model, s).ok_or_else(unfit)?;
     let mut candidates = Vec::new();
     let mut cv_gains = Vec::new();
-    let signal_power = s.acceleration[s.first..].iter().map(|a| a * a).sum::<f64>()
-        / (n - s.first).max(1) as f64;
+    let signal_power =
+        s.acceleration[s.first..].iter().map(|a| a * a).sum::<f64>() / (n - s.first).max(1) as f64;
     for _round in 0..options.max_effects {
         // A model that already fits to rounding error leaves nothing to explain.
         if current.mse < 1e-18 * signal_power {
@@ -621,9 +661,13 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             if excluded {
                 continue;
             }
-            let Some(param) = tune(&model, kind, s) else { continue };
+            let Some(param) = tune(&model, kind, s) else {
+                continue;
+            };
             let trial = model.with(Effect { kind, param });
-            let Some(cv) = cross_validate(&trial, s) else { continue };
+            let Some(cv) = cross_validate(&trial, s) else {
+                continue;
+            };
             let gain = 1.0 - cv.mse / current.mse;
             let wins = fold_wins(&cv, &current);
             let value = fit_on_all(&trial, s)
@@ -634,7 +678,11 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             if let Err(why) = physical(kind, value, s.rate) {
                 note = why;
             } else if gain < MIN_GAIN {
-                note = format!("held-out gain {:.2} % is below the {:.0} % threshold", gain * 100.0, MIN_GAIN * 100.0);
+                note = format!(
+                    "held-out gain {:.2} % is below the {:.0} % threshold",
+                    gain * 100.0,
+                    MIN_GAIN * 100.0
+                );
             } else if wins < MIN_FOLDS_BETTER {
                 note = format!("better in only {wins} of {FOLDS} folds");
             } else {
@@ -696,7 +744,9 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         }
         let near = passing;
         let best = near.into_iter().next().map(|(t, c, g, i, _)| (t, c, g, i));
-        let Some((trial, cv, gain, index)) = best else { break };
+        let Some((trial, cv, gain, index)) = best else {
+            break;
+        };
         candidates[index].selected = true;
         current_sim = sim_of(&trial).map_or(current_sim, |v| rms_error(&v, measured));
         model = trial;
@@ -730,7 +780,10 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     let (f_peak, ratio) = periodogram(s, &r_ext);
     let mut unexplained = None;
     if ratio > 40.0 {
-        let probe = model.with(Effect { kind: EffectKind::PeriodicDisturbance, param: f_peak });
+        let probe = model.with(Effect {
+            kind: EffectKind::PeriodicDisturbance,
+            param: f_peak,
+        });
         if let Some(cv) = cross_validate(&probe, s) {
             let gain = 1.0 - cv.mse / current.mse;
             if gain >= MIN_GAIN && fold_wins(&cv, &current) >= MIN_FOLDS_BETTER {
@@ -739,7 +792,9 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
                 let by_position = correlations
                     .iter()
                     .find(|c| c.0.starts_with("position"))
-                    .map_or(String::new(), |c| format!(", correlation with rotor angle {:.2}", c.1));
+                    .map_or(String::new(), |c| {
+                        format!(", correlation with rotor angle {:.2}", c.1)
+                    });
                 unexplained = Some(Unexplained {
                     description: format!(
                         "a torque of about {amp:.2e} N·m periodic in time at {f_peak:.3} Hz (peak {ratio:.0}× the median of the residual spectrum) \

@@ -233,7 +233,8 @@ pub fn read_samples(path: &std::path::Path) -> anyhow::Result<(Vec<Sample>, usiz
     let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
         Box::new(std::io::BufReader::new(std::io::stdin()))
     } else {
-        let f = std::fs::File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+        let f = std::fs::File::open(path)
+            .map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
         Box::new(std::io::BufReader::new(f))
     };
     let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;

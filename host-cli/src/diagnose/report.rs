@@ -77,7 +77,11 @@ pub fn to_text(r: &Report, source: &str) -> String {
 pub fn figure(r: &Report) -> Figure {
     let tr = &r.traces;
     let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    let ext = if names.is_empty() { "extended (= base)".to_string() } else { format!("base + {}", names.join(" + ")) };
+    let ext = if names.is_empty() {
+        "extended (= base)".to_string()
+    } else {
+        format!("base + {}", names.join(" + "))
+    };
     Figure {
         title: format!(
             "propid diagnose: simulated-velocity RMS {:.3} → {:.3} rad/s ({:+.1} %)",
@@ -89,9 +93,24 @@ pub fn figure(r: &Report) -> Figure {
                 title: "held-out data: measured velocity vs open-loop simulation".into(),
                 y_label: "ω [rad/s]".into(),
                 series: vec![
-                    Series { name: "measured".into(), x: tr.t.clone(), y: tr.measured.clone(), style: Style::Points },
-                    Series { name: "base model".into(), x: tr.t.clone(), y: tr.base.clone(), style: Style::Line },
-                    Series { name: ext.clone(), x: tr.t.clone(), y: tr.extended.clone(), style: Style::Line },
+                    Series {
+                        name: "measured".into(),
+                        x: tr.t.clone(),
+                        y: tr.measured.clone(),
+                        style: Style::Points,
+                    },
+                    Series {
+                        name: "base model".into(),
+                        x: tr.t.clone(),
+                        y: tr.base.clone(),
+                        style: Style::Line,
+                    },
+                    Series {
+                        name: ext.clone(),
+                        x: tr.t.clone(),
+                        y: tr.extended.clone(),
+                        style: Style::Line,
+                    },
                 ],
             },
             Panel {
@@ -101,13 +120,23 @@ pub fn figure(r: &Report) -> Figure {
                     Series {
                         name: "base model".into(),
                         x: tr.t.clone(),
-                        y: tr.base.iter().zip(&tr.measured).map(|(a, b)| a - b).collect(),
+                        y: tr
+                            .base
+                            .iter()
+                            .zip(&tr.measured)
+                            .map(|(a, b)| a - b)
+                            .collect(),
                         style: Style::Line,
                     },
                     Series {
                         name: ext,
                         x: tr.t.clone(),
-                        y: tr.extended.iter().zip(&tr.measured).map(|(a, b)| a - b).collect(),
+                        y: tr
+                            .extended
+                            .iter()
+                            .zip(&tr.measured)
+                            .map(|(a, b)| a - b)
+                            .collect(),
                         style: Style::Line,
                     },
                 ],
@@ -116,8 +145,18 @@ pub fn figure(r: &Report) -> Figure {
                 title: "acceleration residual (all data)".into(),
                 y_label: "[rad/s²]".into(),
                 series: vec![
-                    Series { name: "base model".into(), x: tr.t_all.clone(), y: tr.residual_base.clone(), style: Style::Points },
-                    Series { name: "extended model".into(), x: tr.t_all.clone(), y: tr.residual_extended.clone(), style: Style::Points },
+                    Series {
+                        name: "base model".into(),
+                        x: tr.t_all.clone(),
+                        y: tr.residual_base.clone(),
+                        style: Style::Points,
+                    },
+                    Series {
+                        name: "extended model".into(),
+                        x: tr.t_all.clone(),
+                        y: tr.residual_extended.clone(),
+                        style: Style::Points,
+                    },
                 ],
             },
         ],

@@ -75,7 +75,11 @@ impl Signals {
             )));
         }
         let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
-        let mut dts: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).collect();
+        let mut dts: Vec<f64> = t
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .filter(|d| *d > 0.0)
+            .collect();
         if dts.is_empty() {
             return Err(InputError("all samples have the same time".into()));
         }
@@ -89,7 +93,11 @@ impl Signals {
             .all(|s| s.position.is_finite())
             .then(|| samples.iter().map(|s| s.position).collect());
         let warm_up = t[0] + 0.5;
-        let first = t.iter().position(|x| *x >= warm_up).unwrap_or(0).min(t.len() / 2);
+        let first = t
+            .iter()
+            .position(|x| *x >= warm_up)
+            .unwrap_or(0)
+            .min(t.len() / 2);
         Ok(Signals {
             first,
             force_rate: local_slope(&t, &force, h),
