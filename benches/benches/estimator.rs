@@ -8,7 +8,9 @@ use std::hint::black_box;
 fn rows<const N: usize>(n: usize) -> Vec<([f64; N], f64)> {
     let mut s = 0x1234_5678u64;
     let mut next = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
     };
     (0..n)
@@ -67,7 +69,9 @@ fn solve(c: &mut Criterion) {
     g.bench_function("load fit with the seed's bounds (f64)", |b| {
         b.iter(|| black_box(&est).estimate(&LoadBounds::default()))
     });
-    g.bench_function("unconstrained (f64)", |b| b.iter(|| black_box(&est).estimate_unbounded()));
+    g.bench_function("unconstrained (f64)", |b| {
+        b.iter(|| black_box(&est).estimate_unbounded())
+    });
     g.bench_function("merge (f64, N=3)", |b| {
         b.iter(|| {
             let mut x = est;

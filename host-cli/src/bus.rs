@@ -1,1 +1,38 @@
-//! Opening a CAN bus from a PyCyphal-style interface string (not yet implemented).
+//! Opening a CAN bus from a PyCyphal-style interface string.
+//!
+//! `UAVCAN__CAN__IFACE` (or `--iface`): `socketcan:can0` or `slcan:/dev/ttyACM0@115200`;
+//! `UAVCAN__CAN__BITRATE` ("1000000" or "1000000 4000000"); `UAVCAN__CAN__MTU` (8 or 64).
+
+use propid_transport::{parse_bitrate, CanTransport, IfaceSpec};
+
+use crate::InputError;
+
+/// Opens the interface. SLCAN is Classic CAN only: MTU 64 is refused before anything is sent.
+pub fn open(iface: &str, bitrate: &str, mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
+    let spec = IfaceSpec::parse(iface).map_err(|e| InputError(e.to_string()))?;
+    let (arbitration, _data) = parse_bitrate(bitrate).map_err(|e| InputError(e.to_string()))?;
+    if mtu != 8 && mtu != 64 {
+        return Err(InputError(format!(
+            "MTU must be 8 (Classic CAN) or 64 (CAN FD), got {mtu}"
+        ))
+        .into());
+    }
+    Ok(match spec {
+        IfaceSpec::Slcan { path, baud } => {
+            if mtu != 8 {
+                return Err(InputError(format!(
+                    "{iface}: SLCAN carries Classic CAN only; set UAVCAN__CAN__MTU=8 (got {mtu})"
+                ))
+                .into());
+            }
+            Box::new(propid_slcan::SlcanTransport::open(
+                &path,
+                baud,
+                arbitration,
+            )?)
+        }
+        IfaceSpec::SocketCan { name } => {
+            Box::new(propid_socketcan::SocketCanTransport::open(&name, mtu)?)
+        }
+    })
+}

@@ -1,4 +1,21 @@
 //! # propid-slcan
 //!
-//! SLCAN as spoken by the Zubax Babel.
+//! SLCAN (the Lawicel ASCII protocol) as the Zubax Babel speaks it: a Sans-IO codec and a
+//! serial-port transport.
+//!
+//! ```text
+//!  serial bytes ─► Decoder::push ─► Event::Frame { id, data, adapter_ms } ─► TimestampUnwrapper ─► Frame
+//!                                   Event::Ack / Nack / Status / Version / Garbage
+//!  Frame ─► encode_frame ─► "T1060642A203E0\r" ─► serial port
+//! ```
+//! - [`codec`]: bytes in, events out; frames and commands in, bytes out. No I/O.
+//! - [`SlcanTransport`]: opens a serial port (`serialport`, no libudev), configures the adapter
+//!   (`C`, `S8` or a raw bit rate, `Z1` timestamps, `O`) and implements
+//!   `propid_transport::CanTransport`.
 #![deny(missing_docs)]
+
+pub mod codec;
+mod serial;
+
+pub use codec::{bitrate_command, encode_frame, Decoder, Event, StatusFlags, TimestampUnwrapper};
+pub use serial::SlcanTransport;
