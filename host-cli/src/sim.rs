@@ -168,6 +168,39 @@ impl Default for StandConfig {
 }
 
 impl StandConfig {
+    /// Checks that the values make a stand (positive inertia, rate, …).
+    pub fn validate(&self) -> Result<(), InputError> {
+        let positive = [
+            ("--inertia", self.inertia),
+            ("--rate", self.rate),
+            ("--max-torque", self.max_torque),
+            ("--drag-exponent", self.drag_exponent),
+        ];
+        for (name, v) in positive {
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(InputError(format!("{name} must be positive (got {v})")));
+            }
+        }
+        let non_negative = [
+            ("--c1", self.c1),
+            ("--c2", self.c2),
+            ("--coulomb", self.coulomb),
+            ("--torque-lag", self.torque_lag),
+            ("--force-sensor-lag", self.force_sensor_lag),
+            ("--acceleration-lag", self.acceleration_lag),
+            ("--noise-force", self.noise_force),
+            ("--noise-velocity", self.noise_velocity),
+            ("--noise-acceleration", self.noise_acceleration),
+            ("--jitter", self.jitter),
+        ];
+        for (name, v) in non_negative {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+            }
+        }
+        Ok(())
+    }
+
     /// The load parameters for the core model.
     pub fn load_params(&self) -> LoadParams<f64> {
         LoadParams {
@@ -347,12 +380,10 @@ pub fn simulate(config: StandConfig, excitation: &Excitation, seed: u64) -> Vec<
     out
 }
 
-/// Arguments of `propid sim`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// Output TSV (standard output if omitted).
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
+/// The simulated stand's parameters as command-line options (shared by `sim`, `sim-drive` and
+/// `demo`).
+#[derive(clap::Args, Debug, Clone)]
+pub struct StandArgs {
     /// Random seed for the noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -410,6 +441,17 @@ pub struct Args {
     /// Sampling-time jitter [s].
     #[arg(long, default_value_t = StandConfig::default().jitter)]
     pub jitter: f64,
+}
+
+/// Arguments of `propid sim`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Output TSV (standard output if omitted).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// The stand.
+    #[command(flatten)]
+    pub stand: StandArgs,
     /// Low setpoint.
     #[arg(long, default_value_t = 0.1)]
     pub lo: f64,
@@ -430,9 +472,15 @@ pub struct Args {
     pub pattern: Pattern,
 }
 
-impl Args {
-    /// The stand configuration these arguments describe.
-    pub fn config(&self) -> StandConfig {
+impl StandArgs {
+    /// The stand configuration these arguments describe (validated).
+    pub fn config(&self) -> Result<StandConfig, InputError> {
+        let config = self.config_unchecked();
+        config.validate()?;
+        Ok(config)
+    }
+
+    fn config_unchecked(&self) -> StandConfig {
         StandConfig {
             inertia: self.inertia,
             c1: self.c1,
@@ -454,7 +502,9 @@ impl Args {
             jitter: self.jitter,
         }
     }
+}
 
+impl Args {
     /// The excitation these arguments describe.
     pub fn excitation(&self) -> Excitation {
         Excitation {
@@ -470,37 +520,9 @@ impl Args {
 
 /// Runs `propid sim`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let config = args.config();
+    let config = args.stand.config()?;
     let excitation = args.excitation();
     excitation.validate()?;
-    let positive = [
-        ("--inertia", config.inertia),
-        ("--rate", config.rate),
-        ("--max-torque", config.max_torque),
-        ("--drag-exponent", config.drag_exponent),
-    ];
-    for (name, v) in positive {
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(InputError(format!("{name} must be positive (got {v})")).into());
-        }
-    }
-    let non_negative = [
-        ("--c1", config.c1),
-        ("--c2", config.c2),
-        ("--coulomb", config.coulomb),
-        ("--torque-lag", config.torque_lag),
-        ("--force-sensor-lag", config.force_sensor_lag),
-        ("--acceleration-lag", config.acceleration_lag),
-        ("--noise-force", config.noise_force),
-        ("--noise-velocity", config.noise_velocity),
-        ("--noise-acceleration", config.noise_acceleration),
-        ("--jitter", config.jitter),
-    ];
-    for (name, v) in non_negative {
-        if !(v >= 0.0 && v.is_finite()) {
-            return Err(InputError(format!("{name} must be ≥ 0 (got {v})")).into());
-        }
-    }
     let out: Box<dyn Write> = match &args.output {
         Some(p) => Box::new(std::io::BufWriter::new(
             std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
@@ -508,7 +530,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
     let mut writer = TsvWriter::new(out, false)?;
-    let mut stand = Stand::new(config, args.seed);
+    let mut stand = Stand::new(config, args.stand.seed);
     let rows = stand.run(&excitation, |row| Ok(writer.write(&row)?))?;
     writer.into_inner()?;
     eprintln!(

@@ -1,10 +1,247 @@
-//! `propid sim-drive` (not yet implemented).
+//! `propid sim-drive`: a simulated Telega as a Cyphal node.
+//!
+//! ```text
+//!  transport ─► Node::handle_frame ─► Readiness (torque only when ENGAGED), Vector31 setpoint
+//!  every feedback interval: Stand::advance_to(t) ─► Stand::measure ─► DoF3rdTs (device timestamp)
+//!                           ─► Node::publish ─► transport
+//!  deadman: no setpoint for 0.5 s ⇒ zero torque
+//! ```
+//! It runs the same stand model as `propid sim` (`sim::Stand`), in real time.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use anyhow::Context;
+use propid_core::can::{Mtu, Priority};
+use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
+use propid_core::node::{Event, NodeConfig};
+use propid_core::time::Instant;
+use propid_transport::{CanTransport, HostClock};
+
+use crate::drive::HostNode;
+use crate::sim::{Stand, StandArgs, StandConfig};
+use crate::InputError;
 
 /// Arguments of `propid sim-drive`.
-#[derive(clap::Args, Debug)]
-pub struct Args {}
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// This node's ID.
+    #[arg(long, env = "UAVCAN__NODE__ID", default_value_t = 42)]
+    pub node_id: u8,
+    /// CAN interface (`socketcan:vcan0`, `slcan:/dev/pts/3`).
+    #[arg(long, env = "UAVCAN__CAN__IFACE")]
+    pub iface: Option<String>,
+    /// 8 (Classic CAN) or 64 (CAN FD).
+    #[arg(long, env = "UAVCAN__CAN__MTU", default_value_t = 8)]
+    pub mtu: usize,
+    /// Bit rate(s).
+    #[arg(long, env = "UAVCAN__CAN__BITRATE", default_value = "1000000")]
+    pub bitrate: String,
+    /// Readiness subject (no readiness gating when unset).
+    #[arg(long, env = "UAVCAN__SUB__READINESS__ID")]
+    pub readiness_id: Option<u16>,
+    /// Ratiometric setpoint subject.
+    #[arg(long, env = "UAVCAN__SUB__SP_RAT__ID", default_value_t = 24)]
+    pub setpoint_id: u16,
+    /// Dynamics feedback subject.
+    #[arg(long, env = "UAVCAN__PUB__FB_DYN__ID", default_value_t = 110)]
+    pub feedback_id: u16,
+    /// Feedback interval [s].
+    #[arg(long, default_value_t = 0.002)]
+    pub interval: f64,
+    /// Stop after this many seconds (0: run until interrupted).
+    #[arg(long, default_value_t = 0.0)]
+    pub duration: f64,
+    /// The simulated stand.
+    #[command(flatten)]
+    pub stand: StandArgs,
+}
+
+/// The simulated drive's settings.
+#[derive(Clone, Debug)]
+pub struct SimDriveConfig {
+    /// Node-ID.
+    pub node_id: u8,
+    /// 8 or 64.
+    pub mtu: usize,
+    /// Readiness subject.
+    pub readiness_id: Option<u16>,
+    /// Setpoint subject.
+    pub setpoint_id: u16,
+    /// Feedback subject.
+    pub feedback_id: u16,
+    /// Feedback interval [s].
+    pub interval: f64,
+    /// Run time limit [s] (0: none).
+    pub duration: f64,
+    /// The stand.
+    pub stand: StandConfig,
+    /// Noise seed.
+    pub seed: u64,
+}
+
+/// What the simulated drive saw.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SimDriveSummary {
+    /// Readiness values received, in order, with consecutive repeats collapsed.
+    pub readiness_changes: Vec<u8>,
+    /// The last readiness received.
+    pub last_readiness: Option<u8>,
+    /// The last setpoint received.
+    pub last_setpoint: Option<f32>,
+    /// Setpoints received.
+    pub setpoints: u64,
+    /// Feedback messages published.
+    pub feedback_published: u64,
+}
+
+/// Runs the simulated drive until `stop` is raised or its duration ends.
+pub fn run_sim_drive(
+    cfg: &SimDriveConfig,
+    transport: &mut dyn CanTransport,
+    stop: &AtomicBool,
+) -> Result<SimDriveSummary, String> {
+    let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
+    let start = HostClock::now();
+    let mut node = HostNode::new(
+        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
+        start,
+    );
+    let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
+    if let Some(id) = cfg.readiness_id {
+        let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
+    }
+    let mut stand = Stand::new(cfg.stand, cfg.seed);
+    let mut summary = SimDriveSummary::default();
+    let interval = Duration::from_secs_f64(cfg.interval);
+    let mut next_feedback = start;
+    let mut last_setpoint_at: Option<Instant> = None;
+    let mut setpoint = 0.0f64;
+    loop {
+        let now = HostClock::now();
+        let t = now.saturating_duration_since(start).as_secs_f64();
+        if stop.load(Ordering::Relaxed) || (cfg.duration > 0.0 && t >= cfg.duration) {
+            return Ok(summary);
+        }
+        if now >= next_feedback {
+            let engaged = match cfg.readiness_id {
+                Some(_) => summary.last_readiness == Some(Readiness::ENGAGED),
+                None => true,
+            };
+            let alive = last_setpoint_at
+                .is_some_and(|at| now.saturating_duration_since(at) < Duration::from_millis(500));
+            stand.set_setpoint(if engaged && alive { setpoint } else { 0.0 });
+            stand.advance_to(t);
+            let s = stand.measure();
+            let mut fb = DoF3rdTs::default();
+            fb.timestamp.microsecond = (t * 1e6) as u64;
+            fb.value.kinematics.base.position = s.position as f32;
+            fb.value.kinematics.base.velocity = s.velocity as f32;
+            fb.value.kinematics.acceleration = s.acceleration as f32;
+            fb.value.force = s.force as f32;
+            if node
+                .publish_message(now, cfg.feedback_id, Priority::HIGH, &fb, interval * 5)
+                .is_ok()
+            {
+                summary.feedback_published += 1;
+            }
+            next_feedback = next_feedback + interval;
+            if next_feedback < now {
+                next_feedback = now + interval;
+            }
+        }
+        while let Some(f) = node.poll_transmit(now) {
+            transport.send(&f).map_err(|e| e.to_string())?;
+        }
+        let wait = next_feedback
+            .saturating_duration_since(HostClock::now())
+            .min(Duration::from_millis(5));
+        let Some(frame) = transport.receive(wait).map_err(|e| e.to_string())? else {
+            continue;
+        };
+        match node.handle_frame(HostClock::now(), &frame) {
+            Some(Event::Message {
+                subject_id,
+                payload,
+                ..
+            }) if subject_id == cfg.setpoint_id => {
+                if let Ok(v) = Vector31::deserialize(payload) {
+                    setpoint = f64::from(v.value[0]);
+                    summary.last_setpoint = Some(v.value[0]);
+                    summary.setpoints += 1;
+                    last_setpoint_at = Some(HostClock::now());
+                }
+            }
+            Some(Event::Message {
+                subject_id,
+                payload,
+                ..
+            }) if Some(subject_id) == cfg.readiness_id => {
+                if let Ok(r) = Readiness::deserialize(payload) {
+                    if summary.last_readiness != Some(r.value) {
+                        summary.readiness_changes.push(r.value);
+                    }
+                    summary.last_readiness = Some(r.value);
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+fn readiness_name(v: u8) -> &'static str {
+    match v {
+        Readiness::SLEEP => "SLEEP",
+        Readiness::STANDBY => "STANDBY",
+        Readiness::ENGAGED => "ENGAGED",
+        _ => "undefined",
+    }
+}
 
 /// Runs `propid sim-drive`.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("propid sim-drive is not implemented yet")
+pub fn run(args: Args) -> anyhow::Result<()> {
+    let iface = args
+        .iface
+        .clone()
+        .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
+    if !(args.interval > 0.0) || args.interval.is_nan() {
+        return Err(InputError(format!(
+            "--interval must be positive (got {})",
+            args.interval
+        ))
+        .into());
+    }
+    let cfg = SimDriveConfig {
+        node_id: args.node_id,
+        mtu: args.mtu,
+        readiness_id: args.readiness_id,
+        setpoint_id: args.setpoint_id,
+        feedback_id: args.feedback_id,
+        interval: args.interval,
+        duration: args.duration,
+        stand: args.stand.config()?,
+        seed: args.stand.seed,
+    };
+    let mut transport = crate::bus::open(&iface, &args.bitrate, cfg.mtu)?;
+    let stop = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        signal_hook::flag::register(signal, Arc::clone(&stop))
+            .context("installing signal handlers")?;
+    }
+    eprintln!(
+        "sim-drive: node {} on {} publishing feedback on subject {}",
+        cfg.node_id,
+        transport.name(),
+        cfg.feedback_id
+    );
+    let summary = run_sim_drive(&cfg, transport.as_mut(), &stop).map_err(anyhow::Error::msg)?;
+    eprintln!(
+        "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {:?}",
+        summary.setpoints,
+        summary.feedback_published,
+        summary.last_readiness.map_or("none", readiness_name),
+        summary.last_setpoint
+    );
+    Ok(())
 }

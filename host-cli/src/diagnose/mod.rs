@@ -29,7 +29,7 @@ use anyhow::Context;
 use serde::Serialize;
 
 pub use effects::{Effect, EffectKind};
-pub use report::to_text;
+pub use report::{figure as report_figure, to_text};
 use signals::Signals;
 
 use crate::tsv::{Sample, TsvReader};
