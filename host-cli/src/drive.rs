@@ -183,7 +183,7 @@ impl Args {
                 self.setpoint_period
             )));
         }
-        if !(self.deadman > 0.0) || self.deadman.is_nan() {
+        if self.deadman.is_nan() || self.deadman <= 0.0 {
             return Err(InputError(format!(
                 "--deadman must be positive (got {})",
                 self.deadman

@@ -205,7 +205,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .iface
         .clone()
         .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
-    if !(args.interval > 0.0) || args.interval.is_nan() {
+    if args.interval.is_nan() || args.interval <= 0.0 {
         return Err(InputError(format!(
             "--interval must be positive (got {})",
             args.interval
