@@ -58,7 +58,7 @@ fn replays_the_vector_frames() {
                 .unwrap();
         let r = &rows[0];
         assert!(
-            (r[0] - 1_700_000_000.0002).abs() < 1e-6,
+            (r[0] - 1_700_000_000.000_2).abs() < 1e-6,
             "first-frame time {}",
             r[0]
         );
