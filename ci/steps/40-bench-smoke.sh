@@ -1,0 +1,5 @@
+#!/usr/bin/env bash
+# Benchmarks must build and run; CI runs each once (no numbers are taken from CI).
+set -euo pipefail
+cargo bench -q -p propid-benches -- --test
+SMOKE=1 bash benches/compare_fit.sh
