@@ -21,7 +21,7 @@ pub mod tsv;
 
 /// An error caused by bad input (a file's content, an argument's value). The binary exits with
 /// status 2 for these and 1 for everything else.
-#[derive(Debug, thiserror::Error)]
+#[derive(Clone, Debug, thiserror::Error)]
 #[error("{0}")]
 pub struct InputError(pub String);
 

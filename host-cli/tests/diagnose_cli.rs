@@ -115,3 +115,48 @@ fn bad_input_exits_2() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("lo < hi"));
 }
+
+#[test]
+fn import_then_diagnose_a_real_log() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("f40.tsv");
+    let log = common::repo().join("tests/data/esc_test_alspitz/autoquad/f40_steps_5-2.csv");
+    let out = propid(
+        &[
+            "import",
+            "autoquad",
+            log.to_str().unwrap(),
+            "--kv",
+            "1600",
+            "-o",
+            tsv.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("Kt = 60/(2π·kv)"),
+        "the importer states its assumption"
+    );
+    let out = propid(
+        &["diagnose", tsv.to_str().unwrap(), "--format", "json"],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(r["effects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|e| e["name"] == "force_sensor_lag"));
+    let out = propid(&["import", "rcbench", "/nonexistent.csv"], None);
+    assert_eq!(out.status.code(), Some(2));
+}

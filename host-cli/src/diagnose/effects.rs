@@ -352,7 +352,7 @@ fn rms_error(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Golden-section minimisation of `f` on [lo, hi].
-fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iterations: usize) -> f64 {
+pub(super) fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iterations: usize) -> f64 {
     let g = 0.618_033_988_75;
     let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut f1, mut f2) = (f(x1), f(x2));
@@ -836,6 +836,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             peak_to_median,
         },
         candidates,
+        steady_state: None,
         notes,
         traces,
     })

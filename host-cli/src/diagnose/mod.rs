@@ -22,6 +22,9 @@
 mod effects;
 mod report;
 mod signals;
+mod steady;
+
+pub use steady::DragLaw;
 
 use std::path::PathBuf;
 
@@ -169,6 +172,9 @@ pub struct Report {
     pub residual_analysis: ResidualAnalysis,
     /// Every candidate tried, in the last round of selection and the rounds before.
     pub candidates: Vec<CandidateScore>,
+    /// The drag law from steady-state data, when the recording cannot identify the inertia
+    /// (then `base.mass` is null and the simulation fields are null).
+    pub steady_state: Option<DragLaw>,
     /// Notes about the data (steady-state data, missing columns, …).
     pub notes: Vec<String>,
     /// Series for plots (not serialised).
@@ -196,9 +202,65 @@ pub struct Traces {
 }
 
 /// Diagnoses a recording.
+///
+/// Rows may lack the force (a slow load cell): dynamics are diagnosed on the rows that have it;
+/// when those cannot identify the inertia (steady plateaus), the drag law is diagnosed instead.
 pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputError> {
-    let signals = Signals::new(samples)?;
-    effects::run(&signals, options)
+    let complete: Vec<Sample> = samples.iter().copied().filter(Sample::is_finite).collect();
+    let signals = Signals::new(&complete)?;
+    match effects::run(&signals, options) {
+        Ok(mut r) => {
+            r.steady_state = steady::drag_law(&signals)
+                .filter(|_| r.notes.iter().any(|n| n.contains("steady state")));
+            Ok(r)
+        }
+        Err(dynamics) => {
+            let law = steady::drag_law(&signals).ok_or(dynamics.clone())?;
+            Ok(steady_report(&signals, law, dynamics))
+        }
+    }
+}
+
+fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
+    let mut effects = Vec::new();
+    if law.selected {
+        effects.push(NamedEffect {
+            name: "drag_exponent",
+            value: law.exponent,
+            unit: "1",
+            stderr: law.exponent_stderr,
+            gain_percent: 100.0 * (1.0 - law.rms_extended / law.rms_seed),
+            cv_gain_percent: law.cv_gain_percent,
+            explanation: format!(
+                "the steady-state torque grows as |ω|^{:.3}, not ω²: the torque coefficient depends on speed",
+                law.exponent
+            ),
+        });
+    }
+    let n = s.len();
+    Report {
+        samples: n,
+        duration_s: s.t[n - 1] - s.t[0],
+        rate_hz: s.rate,
+        base: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.c2, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        effects,
+        extended: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.k, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        simulation_rms: SimulationRms {
+            base: law.rms_seed,
+            extended: law.rms_extended,
+            gain_percent: 100.0 * (1.0 - law.rms_extended / law.rms_seed),
+        },
+        unexplained: None,
+        residual_analysis: ResidualAnalysis { correlations: Vec::new(), dominant_frequency_hz: f64::NAN, peak_to_median: f64::NAN },
+        candidates: Vec::new(),
+        notes: vec![format!(
+            "steady-state data: the dynamics cannot be fitted ({}); the drag law is diagnosed from {} torque samples instead, \
+             and simulation_rms holds the torque residual [N·m] of the seed's law (F = c2·ω² + F₀) and of F = k·|ω|^p + F₀",
+            why.0, law.samples
+        )],
+        steady_state: Some(law),
+        traces: Traces::default(),
+    }
 }
 
 /// Output format.
