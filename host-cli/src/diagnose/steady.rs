@@ -53,8 +53,21 @@ fn folds(s: &Signals, idx: &[usize], p: f64) -> [NormalEquations<f64, 2>; FOLDS]
     eqs
 }
 
-/// (pooled held-out MSE, per-fold MSE, in-sample fit (θ, rss, n)).
-fn score(s: &Signals, idx: &[usize], p: f64) -> Option<(f64, [f64; FOLDS], [f64; 2], f64, f64)> {
+/// How a law with exponent p scores.
+struct Score {
+    /// Pooled held-out mean squared error.
+    mse: f64,
+    /// Held-out MSE per fold.
+    folds: [f64; FOLDS],
+    /// (k, F₀) fitted to all samples.
+    theta: [f64; 2],
+    /// In-sample residual sum of squares.
+    rss: f64,
+    /// Samples.
+    n: f64,
+}
+
+fn score(s: &Signals, idx: &[usize], p: f64) -> Option<Score> {
     let eqs = folds(s, idx, p);
     let mut per = [0.0; FOLDS];
     let (mut total, mut count) = (0.0, 0.0);
@@ -77,7 +90,13 @@ fn score(s: &Signals, idx: &[usize], p: f64) -> Option<(f64, [f64; FOLDS], [f64;
     }
     let sol = all.solve().ok()?;
     let rss = all.residual_sum_of_squares(&sol.theta);
-    Some((total / count.max(1.0), per, sol.theta, rss, all.count()))
+    Some(Score {
+        mse: total / count.max(1.0),
+        folds: per,
+        theta: sol.theta,
+        rss,
+        n: all.count(),
+    })
 }
 
 /// Fits both laws; `None` if there are too few usable samples.
@@ -89,8 +108,9 @@ pub fn drag_law(s: &Signals) -> Option<DragLaw> {
     if idx.len() < 20 {
         return None;
     }
-    let (mse2, per2, th2, rss2, n) = score(s, &idx, 2.0)?;
-    let cv = |p: f64| score(s, &idx, p).map_or(f64::INFINITY, |x| x.0);
+    let seed = score(s, &idx, 2.0)?;
+    let (mse2, per2, th2, rss2, n) = (seed.mse, seed.folds, seed.theta, seed.rss, seed.n);
+    let cv = |p: f64| score(s, &idx, p).map_or(f64::INFINITY, |x| x.mse);
     let grid: Vec<f64> = (0..=20).map(|k| 1.2 + 0.1 * k as f64).collect();
     let scores: Vec<f64> = grid.iter().map(|&p| cv(p)).collect();
     let k = (0..grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
@@ -100,10 +120,11 @@ pub fn drag_law(s: &Signals) -> Option<DragLaw> {
         cv,
         24,
     );
-    let (msep, perp, thp, rssp, _) = score(s, &idx, p)?;
+    let free = score(s, &idx, p)?;
+    let (msep, perp, thp, rssp) = (free.mse, free.folds, free.theta, free.rss);
     // Standard error of p from the curvature of the in-sample residual.
     let h = 0.01;
-    let rss_at = |q: f64| score(s, &idx, q).map_or(f64::NAN, |x| x.3);
+    let rss_at = |q: f64| score(s, &idx, q).map_or(f64::NAN, |x| x.rss);
     let curvature = (rss_at(p + h) - 2.0 * rssp + rss_at(p - h)) / (h * h);
     let sigma2 = rssp / (n - 3.0).max(1.0);
     let stderr = if curvature > 0.0 {
