@@ -63,10 +63,10 @@ pub(crate) fn differentiate(rows: &mut [Row]) {
         .iter()
         .map(|r| (r.sample.t, r.sample.velocity))
         .collect();
-    for k in 0..n {
+    for (k, row) in rows.iter_mut().enumerate() {
         let (lo, hi) = (k.saturating_sub(1), (k + 1).min(n - 1));
         let dt = vel[hi].0 - vel[lo].0;
-        rows[k].sample.acceleration = if dt > 0.0 {
+        row.sample.acceleration = if dt > 0.0 {
             (vel[hi].1 - vel[lo].1) / dt
         } else {
             f64::NAN
