@@ -156,7 +156,7 @@ fn sigint_midway_commands_standby_and_keeps_every_row() {
         let n = std::fs::read_to_string(&tsv)
             .map(|s| s.lines().count())
             .unwrap_or(0);
-        if n > 300 {
+        if n > 301 {
             break;
         }
         assert!(
@@ -187,7 +187,7 @@ fn sigint_midway_commands_standby_and_keeps_every_row() {
     );
     assert_eq!(summary.last_setpoint, Some(0.0));
     let rows = check_tsv(&std::fs::read_to_string(&tsv).unwrap());
-    assert!(rows > 300, "{rows}");
+    assert!(rows >= 300, "{rows}");
     drop(driver_end);
 }
 
