@@ -9,6 +9,9 @@ use propid_transport::{CanTransport, HostClock, TransportError};
 
 use crate::codec::{bitrate_command, encode_frame, Decoder, Event, TimestampUnwrapper};
 
+/// How long a write may wait for room in the adapter's buffer before the adapter counts as stuck.
+const WRITE_TIMEOUT: Duration = Duration::from_millis(500);
+
 /// An SLCAN adapter on a serial port (or one end of a pseudo-terminal pair).
 pub struct SlcanTransport {
     port: Box<dyn serialport::SerialPort>,
@@ -78,6 +81,9 @@ impl SlcanTransport {
     }
 
     fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
+        // The port's timeout is shortened while receiving; a write may wait for the adapter
+        // (or the peer on a pseudo-terminal) to drain its buffer, up to WRITE_TIMEOUT.
+        let _ = self.port.set_timeout(WRITE_TIMEOUT);
         self.port.write_all(bytes).map_err(|e| self.io_error(e))?;
         Ok(())
     }

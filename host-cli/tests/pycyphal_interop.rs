@@ -1,0 +1,158 @@
+//! Interop with the reference stack: PyCyphal 1.27.1 (python-can's slcan interface) on one end of a
+//! socat pseudo-terminal pair, `propid drive` on the other. PyCyphal publishes DoF3rdTs and
+//! Heartbeat and propid records the same values; propid publishes Readiness and Vector31 and
+//! PyCyphal decodes the same values (ENGAGED and the setpoints, then STANDBY and zero).
+//! Needs python3 with `pycyphal[transport-can-pythoncan]` and socat (CI installs both); without
+//! them the test fails in CI and skips loudly elsewhere.
+
+mod common;
+
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use common::{python_has, repo};
+
+#[test]
+fn propid_and_pycyphal_understand_each_other_over_slcan() {
+    if !python_has("pycyphal, can, serial") {
+        return;
+    }
+    let has_socat = Command::new("socat")
+        .arg("-V")
+        .stdout(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    if !has_socat {
+        assert!(std::env::var_os("CI").is_none(), "CI must install socat");
+        eprintln!("SKIPPED: socat is not installed");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let compiled = dir.path().join("compiled");
+    let dsdl = repo().join("tests/pycyphal/dsdl");
+    let status = Command::new("python3")
+        .arg("-c")
+        .arg(format!(
+            "import pycyphal.dsdl as d; d.compile('{u}', output_directory='{o}'); \
+             d.compile('{z}', lookup_directories=['{u}'], output_directory='{o}')",
+            u = dsdl.join("uavcan").display(),
+            z = dsdl.join("zubax").display(),
+            o = compiled.display()
+        ))
+        .status()
+        .unwrap();
+    assert!(status.success(), "DSDL compilation");
+    let (a, b) = (dir.path().join("ttyA"), dir.path().join("ttyB"));
+    let mut socat = Command::new("socat")
+        .arg(format!("pty,raw,echo=0,link={}", a.display()))
+        .arg(format!("pty,raw,echo=0,link={}", b.display()))
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    for _ in 0..50 {
+        if a.exists() && b.exists() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let tsv = dir.path().join("run.tsv");
+    let mut drive = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .args([
+            "drive",
+            "--iface",
+            &format!("slcan:{}@115200", b.display()),
+            "--init-duration",
+            "3",
+            "--pattern-duration",
+            "4",
+            "--deadman",
+            "2",
+            "-o",
+        ])
+        .arg(&tsv)
+        .env("UAVCAN__NODE__ID", "10")
+        .env("UAVCAN__PUB__READINESS__ID", "10")
+        .env("UAVCAN__PUB__SP_RAT__ID", "24")
+        .env("UAVCAN__SUB__FB_DYN__ID", "110")
+        // python-can's slcan reader keeps up with a setpoint every 50 ms, not every 5 ms.
+        .env("SETPOINT_PERIOD", "0.05")
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let py = Command::new("python3")
+        .arg(repo().join("tests/pycyphal/interop.py"))
+        .arg(&compiled)
+        .arg(format!("slcan:{}@115200", a.display()))
+        .arg("9")
+        .output()
+        .unwrap();
+    let drive_status = drive.wait().unwrap();
+    let _ = socat.kill();
+    assert!(
+        py.status.success(),
+        "{}",
+        String::from_utf8_lossy(&py.stderr)
+    );
+    assert!(drive_status.success(), "propid drive failed");
+    let report: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
+
+    // PyCyphal → propid: every recorded row is a DoF3rdTs PyCyphal sent, value for value.
+    let text = std::fs::read_to_string(&tsv).unwrap();
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() > 100, "{} rows", rows.len());
+    for r in &rows {
+        let k = r[3];
+        assert_eq!(k.fract(), 0.0, "velocity is the sequence number: {r:?}");
+        assert!((r[1] - k * 0.01).abs() < 1e-9, "timestamp {r:?}");
+        assert_eq!(r[2], f64::from((k / 1000.0) as f32), "force {r:?}");
+        assert_eq!(r[4], -k, "acceleration {r:?}");
+        assert_eq!(r[5], 0.25, "position {r:?}");
+    }
+    assert!(report["sent"].as_array().unwrap().len() >= rows.len());
+
+    // propid → PyCyphal: ENGAGED while driving, STANDBY at the end; setpoints decoded the same.
+    let readiness: Vec<u64> = report["readiness"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(readiness.first(), Some(&3), "{readiness:?}");
+    assert_eq!(readiness.last(), Some(&2), "{readiness:?}");
+    let setpoints = report["setpoints"].as_array().unwrap();
+    assert!(setpoints.len() > 50, "{}", setpoints.len());
+    for sp in setpoints {
+        let v: Vec<f64> = sp
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(v.len(), 31);
+        assert!(v.iter().all(|x| *x == v[0]), "all 31 elements equal: {v:?}");
+        assert!(v[0] == 0.0 || (0.0999..=0.9001).contains(&v[0]), "{}", v[0]);
+    }
+    let first = setpoints[0][0].as_f64().unwrap();
+    assert_eq!(
+        first,
+        f64::from(half_precision(0.9)),
+        "the init phase at the high setpoint"
+    );
+    assert_eq!(
+        setpoints.last().unwrap()[0].as_f64().unwrap(),
+        0.0,
+        "zero setpoint last"
+    );
+}
+
+/// 0.9 through float16, as both stacks send it.
+fn half_precision(x: f32) -> f32 {
+    let mut buf = [0u8; 62];
+    use propid_core::dsdl::{DataType, Vector31};
+    Vector31::splat(x).serialize(&mut buf);
+    Vector31::deserialize(&buf).unwrap().value[0]
+}
