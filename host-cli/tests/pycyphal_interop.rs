@@ -88,6 +88,7 @@ fn propid_and_pycyphal_understand_each_other_over_slcan() {
         .unwrap();
     let drive_status = drive.wait().unwrap();
     let _ = socat.kill();
+    let _ = socat.wait();
     assert!(
         py.status.success(),
         "{}",
