@@ -210,6 +210,22 @@ pub fn bitrate_command(bitrate: u32) -> Option<&'static str> {
     })
 }
 
+/// The Lawicel raw bit-rate command `sXXYY`: the SJA1000-style bus timing registers BTR0 and BTR1,
+/// for rates the `S` codes do not cover.
+pub fn raw_bitrate_command(btr0: u8, btr1: u8) -> String {
+    format!("s{btr0:02X}{btr1:02X}\r")
+}
+
+/// The command that opens the channel: `O` (normal) or `L` (listen only: the adapter neither
+/// acknowledges nor transmits, for sniffing a running stand).
+pub fn open_command(listen_only: bool) -> &'static str {
+    if listen_only {
+        "L\r"
+    } else {
+        "O\r"
+    }
+}
+
 /// Turns the adapter's millisecond timestamps, which wrap every 60 s, into a monotonic count of
 /// microseconds.
 #[derive(Default)]
@@ -306,6 +322,9 @@ mod tests {
         assert_eq!(bitrate_command(750_000), Some("S7\r"));
         assert_eq!(bitrate_command(1_000_000), Some("S8\r"));
         assert_eq!(bitrate_command(333_333), None);
+        assert_eq!(raw_bitrate_command(0x00, 0x14), "s0014\r");
+        assert_eq!(open_command(true), "L\r");
+        assert_eq!(open_command(false), "O\r");
         let mut u = TimestampUnwrapper::default();
         assert_eq!(u.unwrap(59_990), 59_990);
         assert_eq!(u.unwrap(10), 60_010);

@@ -17,5 +17,8 @@
 pub mod codec;
 mod serial;
 
-pub use codec::{bitrate_command, encode_frame, Decoder, Event, StatusFlags, TimestampUnwrapper};
+pub use codec::{
+    bitrate_command, encode_frame, open_command, raw_bitrate_command, Decoder, Event, StatusFlags,
+    TimestampUnwrapper,
+};
 pub use serial::SlcanTransport;

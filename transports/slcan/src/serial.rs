@@ -7,7 +7,10 @@ use propid_core::can::Frame;
 use propid_core::time::Instant;
 use propid_transport::{CanTransport, HostClock, TransportError};
 
-use crate::codec::{bitrate_command, encode_frame, Decoder, Event, TimestampUnwrapper};
+use crate::codec::{
+    bitrate_command, encode_frame, open_command, raw_bitrate_command, Decoder, Event,
+    TimestampUnwrapper,
+};
 
 /// How long a write may wait for room in the adapter's buffer before the adapter counts as stuck.
 const WRITE_TIMEOUT: Duration = Duration::from_millis(500);
@@ -58,13 +61,32 @@ impl SlcanTransport {
         }
     }
 
+    /// Sends the set-up commands for a rate without an `S` code: close, `sXXYY` with the raw bus
+    /// timing registers, timestamps on, open (or listen only).
+    pub fn configure_raw(
+        &mut self,
+        btr0: u8,
+        btr1: u8,
+        listen_only: bool,
+    ) -> Result<(), TransportError> {
+        for cmd in [
+            "C\r".to_string(),
+            raw_bitrate_command(btr0, btr1),
+            "Z1\r".into(),
+            open_command(listen_only).into(),
+        ] {
+            self.write(cmd.as_bytes())?;
+        }
+        Ok(())
+    }
+
     /// Sends the set-up commands: close, bit rate, timestamps on, open.
     pub fn configure(&mut self, bitrate: u32) -> Result<(), TransportError> {
         let rate = match bitrate_command(bitrate) {
             Some(cmd) => cmd.to_string(),
             None => {
                 return Err(TransportError::Unsupported(format!(
-                    "{}: no SLCAN bit-rate code for {bitrate} bit/s (use 10k, 20k, 50k, 100k, 125k, 250k, 500k, 800k or 1M)",
+                    "{}: no SLCAN bit-rate code for {bitrate} bit/s (use 10k, 20k, 50k, 100k, 125k, 250k, 500k, 800k or 1M, or raw bus timing registers with SlcanTransport::configure_raw)",
                     self.name
                 )))
             }
