@@ -7,6 +7,31 @@ use propid_transport::{parse_bitrate, CanTransport, IfaceSpec};
 
 use crate::InputError;
 
+/// Which bus, as PyCyphal's registers (or the same flags) say: shared by `drive` and `sim-drive`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct BusArgs {
+    /// CAN interface: `socketcan:can0` or `slcan:/dev/ttyACM0@115200` (uavcan.can.iface).
+    #[arg(long, env = "UAVCAN__CAN__IFACE")]
+    pub iface: Option<String>,
+    /// Frame size: 8 (Classic CAN) or 64 (CAN FD) (uavcan.can.mtu).
+    #[arg(long, env = "UAVCAN__CAN__MTU", default_value_t = 8)]
+    pub mtu: usize,
+    /// Bit rate(s), "ARBITRATION [DATA]" (uavcan.can.bitrate).
+    #[arg(long, env = "UAVCAN__CAN__BITRATE", default_value = "1000000")]
+    pub bitrate: String,
+}
+
+impl BusArgs {
+    /// Opens the bus these arguments name.
+    pub fn open(&self) -> anyhow::Result<Box<dyn CanTransport>> {
+        let iface = self
+            .iface
+            .as_deref()
+            .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
+        open(iface, &self.bitrate, self.mtu)
+    }
+}
+
 /// Opens the interface. SLCAN is Classic CAN only: MTU 64 is refused before anything is sent.
 pub fn open(iface: &str, bitrate: &str, mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
     let spec = IfaceSpec::parse(iface).map_err(|e| InputError(e.to_string()))?;

@@ -41,15 +41,9 @@ pub struct Args {
     /// This node's ID (register uavcan.node.id).
     #[arg(long, env = "UAVCAN__NODE__ID")]
     pub node_id: Option<u8>,
-    /// CAN interface: `socketcan:can0` or `slcan:/dev/ttyACM0@115200` (uavcan.can.iface).
-    #[arg(long, env = "UAVCAN__CAN__IFACE")]
-    pub iface: Option<String>,
-    /// Frame size: 8 (Classic CAN) or 64 (CAN FD) (uavcan.can.mtu).
-    #[arg(long, env = "UAVCAN__CAN__MTU", default_value_t = 8)]
-    pub mtu: usize,
-    /// Bit rate(s), "ARBITRATION [DATA]" (uavcan.can.bitrate).
-    #[arg(long, env = "UAVCAN__CAN__BITRATE", default_value = "1000000")]
-    pub bitrate: String,
+    /// The bus.
+    #[command(flatten)]
+    pub bus: crate::bus::BusArgs,
     /// Subject-ID of the readiness publisher; no readiness is published when unset
     /// (uavcan.pub.readiness.id).
     #[arg(long, env = "UAVCAN__PUB__READINESS__ID")]
@@ -189,15 +183,15 @@ impl Args {
                 self.deadman
             )));
         }
-        if self.mtu != 8 && self.mtu != 64 {
+        if self.bus.mtu != 8 && self.bus.mtu != 64 {
             return Err(InputError(format!(
                 "MTU must be 8 or 64 (got {})",
-                self.mtu
+                self.bus.mtu
             )));
         }
         Ok(DriveConfig {
             node_id,
-            mtu: self.mtu,
+            mtu: self.bus.mtu,
             readiness_id: self.readiness_id,
             setpoint_id,
             feedback_id,
@@ -434,11 +428,7 @@ pub fn drive(
 /// Runs `propid drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let cfg = args.config()?;
-    let iface = args
-        .iface
-        .clone()
-        .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
-    let mut transport = crate::bus::open(&iface, &args.bitrate, cfg.mtu)?;
+    let mut transport = args.bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(signal, Arc::clone(&stop))

@@ -29,15 +29,9 @@ pub struct Args {
     /// This node's ID.
     #[arg(long, env = "UAVCAN__NODE__ID", default_value_t = 42)]
     pub node_id: u8,
-    /// CAN interface (`socketcan:vcan0`, `slcan:/dev/pts/3`).
-    #[arg(long, env = "UAVCAN__CAN__IFACE")]
-    pub iface: Option<String>,
-    /// 8 (Classic CAN) or 64 (CAN FD).
-    #[arg(long, env = "UAVCAN__CAN__MTU", default_value_t = 8)]
-    pub mtu: usize,
-    /// Bit rate(s).
-    #[arg(long, env = "UAVCAN__CAN__BITRATE", default_value = "1000000")]
-    pub bitrate: String,
+    /// The bus.
+    #[command(flatten)]
+    pub bus: crate::bus::BusArgs,
     /// Readiness subject (no readiness gating when unset).
     #[arg(long, env = "UAVCAN__SUB__READINESS__ID")]
     pub readiness_id: Option<u16>,
@@ -201,10 +195,6 @@ fn readiness_name(v: u8) -> &'static str {
 
 /// Runs `propid sim-drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let iface = args
-        .iface
-        .clone()
-        .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
     if args.interval.is_nan() || args.interval <= 0.0 {
         return Err(InputError(format!(
             "--interval must be positive (got {})",
@@ -214,7 +204,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let cfg = SimDriveConfig {
         node_id: args.node_id,
-        mtu: args.mtu,
+        mtu: args.bus.mtu,
         readiness_id: args.readiness_id,
         setpoint_id: args.setpoint_id,
         feedback_id: args.feedback_id,
@@ -223,7 +213,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand: args.stand.config()?,
         seed: args.stand.seed,
     };
-    let mut transport = crate::bus::open(&iface, &args.bitrate, cfg.mtu)?;
+    let mut transport = args.bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         signal_hook::flag::register(signal, Arc::clone(&stop))

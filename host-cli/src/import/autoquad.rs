@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{column, differentiate, number, Imported};
+use super::{column, differentiate, number, open_csv, Imported};
 use crate::tsv::{Row, Sample};
 use crate::InputError;
 
@@ -11,15 +11,7 @@ pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
     if kv.is_nan() || kv <= 0.0 {
         return Err(InputError(format!("--kv must be positive (got {kv})")));
     }
-    let file = path.display().to_string();
-    let mut reader = csv::ReaderBuilder::new()
-        .flexible(true)
-        .from_path(path)
-        .map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
-    let headers = reader
-        .headers()
-        .map_err(|e| InputError(format!("{file}: line 1: {e}")))?
-        .clone();
+    let (mut reader, headers, file) = open_csv(path)?;
     let (amps, rpm, duty) = (
         column(&headers, "Amps", &file)?,
         column(&headers, "RPM", &file)?,

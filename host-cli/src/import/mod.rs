@@ -74,6 +74,22 @@ pub(crate) fn differentiate(rows: &mut [Row]) {
     }
 }
 
+/// Opens a CSV log: the reader, its header and the file name for messages.
+pub(crate) fn open_csv(
+    path: &Path,
+) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord, String), InputError> {
+    let file = path.display().to_string();
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_path(path)
+        .map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
+    let headers = reader
+        .headers()
+        .map_err(|e| InputError(format!("{file}: line 1: {e}")))?
+        .clone();
+    Ok((reader, headers, file))
+}
+
 /// Finds a column by exact header name (a UTF-8 byte-order mark on the first is ignored).
 pub(crate) fn column(
     headers: &csv::StringRecord,

@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{column, differentiate, number, Imported};
+use super::{column, differentiate, number, open_csv, Imported};
 use crate::tsv::{Row, Sample};
 use crate::InputError;
 
@@ -10,15 +10,7 @@ use crate::InputError;
 /// load-cell torque where it was sampled (NaN elsewhere: never interpolated), its sign made
 /// positive for a torque that resists the rotation.
 pub fn import_rcbench(path: &Path) -> Result<Imported, InputError> {
-    let file = path.display().to_string();
-    let mut reader = csv::ReaderBuilder::new()
-        .flexible(true)
-        .from_path(path)
-        .map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
-    let headers = reader
-        .headers()
-        .map_err(|e| InputError(format!("{file}: line 1: {e}")))?
-        .clone();
+    let (mut reader, headers, file) = open_csv(path)?;
     let time = column(&headers, "Time (s)", &file)?;
     let torque = column(&headers, "Torque (N·m)", &file)?;
     let rpm = column(&headers, "Motor Electrical Speed (RPM)", &file)?;
