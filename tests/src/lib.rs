@@ -1,1 +1,2 @@
 //! Cross-crate integration tests live in `tests/tests/`.
+#![deny(missing_docs)]
