@@ -1,7 +1,8 @@
 //! Plots to SVG, PNG or a self-contained HTML page, chosen by the file extension.
 //!
-//! A [`Figure`] is a stack of [`Panel`]s sharing the x axis (usually time); each panel holds
-//! [`Series`]. Callers describe what to show; this module decides how it looks.
+//! A [`Figure`] is a stack of [`Panel`]s with one x quantity (usually time), each panel scaled to
+//! its own data; each panel holds [`Series`]. Callers describe what to show; this module decides
+//! how it looks.
 
 use std::path::Path;
 
@@ -42,7 +43,7 @@ pub struct Panel {
     pub series: Vec<Series>,
 }
 
-/// A figure: panels stacked vertically sharing one x axis.
+/// A figure: panels stacked vertically, one x quantity.
 #[derive(Clone, Debug)]
 pub struct Figure {
     /// Figure title.
@@ -144,13 +145,9 @@ where
         .titled(&figure.title, ("sans-serif", 24))
         .map_err(err)?;
     let panels = root.split_evenly((figure.panels.len().max(1), 1));
-    let (x0, x1) = range_of(
-        figure
-            .panels
-            .iter()
-            .flat_map(|p| p.series.iter().flat_map(|s| s.x.iter())),
-    );
     for (area, panel) in panels.iter().zip(&figure.panels) {
+        // Each panel spans its own data: a held-out window is not squeezed into the whole run.
+        let (x0, x1) = range_of(panel.series.iter().flat_map(|s| s.x.iter()));
         let (y0, y1) = range_of(panel.series.iter().flat_map(|s| s.y.iter()));
         let mut chart = ChartBuilder::on(area)
             .caption(&panel.title, ("sans-serif", 16))

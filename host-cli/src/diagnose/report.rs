@@ -94,12 +94,6 @@ pub fn figure(r: &Report) -> Figure {
                 y_label: "ω [rad/s]".into(),
                 series: vec![
                     Series {
-                        name: "measured".into(),
-                        x: tr.t.clone(),
-                        y: tr.measured.clone(),
-                        style: Style::Points,
-                    },
-                    Series {
                         name: "base model".into(),
                         x: tr.t.clone(),
                         y: tr.base.clone(),
@@ -110,6 +104,12 @@ pub fn figure(r: &Report) -> Figure {
                         x: tr.t.clone(),
                         y: tr.extended.clone(),
                         style: Style::Line,
+                    },
+                    Series {
+                        name: "measured".into(),
+                        x: tr.t.clone(),
+                        y: tr.measured.clone(),
+                        style: Style::Points,
                     },
                 ],
             },
