@@ -10,8 +10,10 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 propid=${1:-$here/../../target/release/propid}
-kver=$(ls /lib/modules | sort -V | tail -n 1)
-kernel=/boot/vmlinuz-$kver
+# The newest installed kernel image and its modules (not the running kernel: this machine's has no CAN).
+kernel=$(ls /boot/vmlinuz-* | sort -V | tail -n 1)
+kver=${kernel#/boot/vmlinuz-}
+[ -d "/lib/modules/$kver/kernel/net/can" ] || { echo "no CAN modules for $kver" >&2; exit 1; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 root=$work/root
