@@ -393,7 +393,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         args.file.as_deref().unwrap_or(Path::new("-"))
     };
-    let (mut report, samples) = fit_path(path, &args).map_err(|e| {
+    let (report, samples) = fit_path(path, &args).map_err(|e| {
         if from_stdin {
             // Name standard input, not the spool file, in messages.
             let message = format!("{e:#}").replace(&path.display().to_string(), "<stdin>");
@@ -417,7 +417,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         Format::Yaml => to_yaml(&report),
         Format::Json => serde_json::to_string_pretty(&report)? + "\n",
     };
-    report.warnings.clear();
     std::io::stdout().write_all(text.as_bytes())?;
     Ok(())
 }
