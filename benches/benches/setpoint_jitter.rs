@@ -66,27 +66,16 @@ fn main() {
         inner: a,
         sent: Vec::new(),
     };
-    let cfg = DriveConfig {
-        node_id: 10,
-        mtu: 8,
-        readiness_id: Some(10),
-        setpoint_id: 24,
-        feedback_id: 110,
-        // The init phase publishes at the setpoint period like the pattern does; no feedback
-        // is needed for it, so the measurement is the loop alone.
-        excitation: Excitation {
-            lo: 0.1,
-            hi: 0.9,
-            period: 2.0,
-            duration: 0.001,
-            init_duration: seconds,
-            pattern: Pattern::Sine,
-        },
-        setpoint_period: 0.005,
-        deadman: 0.5,
-        fit: false,
-        progress: false,
-    };
+    // The init phase publishes at the setpoint period like the pattern does; no feedback is
+    // needed for it, so the measurement is the loop alone.
+    let cfg = DriveConfig::example(Excitation {
+        lo: 0.1,
+        hi: 0.9,
+        period: 2.0,
+        duration: 0.001,
+        init_duration: seconds,
+        pattern: Pattern::Sine,
+    });
     let t0 = Instant::now();
     let _ = drive(
         &cfg,

@@ -71,17 +71,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand.c2,
         stand.torque_lag * 1e3
     );
-    let sim_cfg = SimDriveConfig {
-        node_id: 42,
-        mtu: 8,
-        readiness_id: Some(10),
-        setpoint_id: 24,
-        feedback_id: 110,
-        interval: 0.002,
-        duration: 0.0,
-        stand,
-        seed: args.seed,
-    };
+    let sim_cfg = SimDriveConfig::example(stand, args.seed);
     let stop_sim = Arc::new(AtomicBool::new(false));
     let telega = {
         let stop = Arc::clone(&stop_sim);
@@ -91,16 +81,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         })
     };
     let cfg = DriveConfig {
-        node_id: 10,
-        mtu: 8,
-        readiness_id: Some(10),
-        setpoint_id: 24,
-        feedback_id: 110,
-        excitation,
-        setpoint_period: 0.005,
-        deadman: 0.5,
         fit: true,
         progress: true,
+        ..DriveConfig::example(excitation)
     };
     let tsv = args.out.join("run.tsv");
     let mut file =

@@ -111,6 +111,25 @@ pub struct DriveConfig {
     pub progress: bool,
 }
 
+impl DriveConfig {
+    /// The seed document's example set-up: node 10, readiness on subject 10, setpoint on 24,
+    /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no progress lines.
+    pub fn example(excitation: Excitation) -> Self {
+        DriveConfig {
+            node_id: 10,
+            mtu: 8,
+            readiness_id: Some(10),
+            setpoint_id: 24,
+            feedback_id: 110,
+            excitation,
+            setpoint_period: 0.005,
+            deadman: 0.5,
+            fit: false,
+            progress: false,
+        }
+    }
+}
+
 impl Args {
     /// Checks everything before anything is sent.
     pub fn config(&self) -> Result<DriveConfig, InputError> {

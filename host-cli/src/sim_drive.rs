@@ -75,6 +75,24 @@ pub struct SimDriveConfig {
     pub seed: u64,
 }
 
+impl SimDriveConfig {
+    /// The counterpart of `DriveConfig::example`: node 42, readiness on 10, setpoint on 24,
+    /// feedback on 110 every 2 ms, Classic CAN, running until stopped.
+    pub fn example(stand: StandConfig, seed: u64) -> Self {
+        SimDriveConfig {
+            node_id: 42,
+            mtu: 8,
+            readiness_id: Some(10),
+            setpoint_id: 24,
+            feedback_id: 110,
+            interval: 0.002,
+            duration: 0.0,
+            stand,
+            seed,
+        }
+    }
+}
+
 /// What the simulated drive saw.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SimDriveSummary {

@@ -17,17 +17,7 @@ use propid_slcan::SlcanTransport;
 use serialport::{SerialPort, TTYPort};
 
 fn sim_cfg() -> SimDriveConfig {
-    SimDriveConfig {
-        node_id: 42,
-        mtu: 8,
-        readiness_id: Some(10),
-        setpoint_id: 24,
-        feedback_id: 110,
-        interval: 0.002,
-        duration: 0.0,
-        stand: StandConfig::default(),
-        seed: 5,
-    }
+    SimDriveConfig::example(StandConfig::default(), 5)
 }
 
 fn start_telega(
@@ -69,23 +59,15 @@ fn drives_the_simulated_telega_and_fits_it() {
     let (drive_end, telega_end) = TTYPort::pair().unwrap();
     let (stop, telega) = start_telega(telega_end);
     let cfg = DriveConfig {
-        node_id: 10,
-        mtu: 8,
-        readiness_id: Some(10),
-        setpoint_id: 24,
-        feedback_id: 110,
-        excitation: Excitation {
+        fit: true,
+        ..DriveConfig::example(Excitation {
             lo: 0.1,
             hi: 0.9,
             period: 2.0,
             duration: 10.0,
             init_duration: 1.0,
             pattern: Pattern::Sine,
-        },
-        setpoint_period: 0.005,
-        deadman: 0.5,
-        fit: true,
-        progress: false,
+        })
     };
     let mut out = Vec::new();
     let mut t = SlcanTransport::from_port(Box::new(drive_end), "driver");
