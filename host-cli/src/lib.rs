@@ -16,6 +16,7 @@
 
 pub mod bus;
 pub mod cmd;
+pub mod html;
 pub mod plot;
 pub mod signals;
 
