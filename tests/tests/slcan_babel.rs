@@ -3,6 +3,8 @@
 //! frames carrying millisecond timestamps that wrap at 60 s, status flags, garbage on the line,
 //! and the adapter vanishing.
 
+#![cfg(unix)] // pseudo-terminals (serialport::TTYPort) exist on Unix only
+
 use std::io::{Read, Write};
 use std::time::Duration;
 
