@@ -186,11 +186,8 @@ fn link() -> anyhow::Result<Link> {
     let (drive_end, telega_end) = TTYPort::pair().context("cannot open a pseudo-terminal pair")?;
     let pty = drive_end.name().unwrap_or_else(|| "pty".into());
     Ok((
-        Box::new(SlcanTransport::from_port(Box::new(drive_end), &pty)),
-        Box::new(SlcanTransport::from_port(
-            Box::new(telega_end),
-            "pty-telega",
-        )),
+        Box::new(SlcanTransport::from_tty(drive_end, &pty)?),
+        Box::new(SlcanTransport::from_tty(telega_end, "pty-telega")?),
         pty,
     ))
 }

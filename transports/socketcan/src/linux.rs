@@ -4,10 +4,11 @@ use std::io::ErrorKind;
 use std::time::{Duration, SystemTime};
 
 use propid_core::can::Frame;
-use propid_transport::{CanTransport, HostClock, TransportError};
+use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
+use socketcan::errors::{ControllerProblems, ErrorCause};
 use socketcan::{
-    CanAnyFrame, CanDataFrame, CanFdFrame, CanFdSocket, CanFilter, EmbeddedFrame, ExtendedId,
-    Frame as _, Socket, SocketOptions,
+    frame::AsPtr, CanAnyFrame, CanDataFrame, CanError, CanFdFrame, CanFdSocket, CanFilter,
+    EmbeddedFrame, ExtendedId, Frame as _, Socket, SocketOptions,
 };
 
 /// The SocketCAN flag marking an extended (29-bit) ID in filters.
@@ -18,6 +19,7 @@ pub struct SocketCanTransport {
     socket: CanFdSocket,
     name: String,
     mtu: usize,
+    health: Health,
 }
 
 impl SocketCanTransport {
@@ -38,10 +40,14 @@ impl SocketCanTransport {
     pub fn from_socket(socket: CanFdSocket, name: &str, mtu: usize) -> Self {
         // Ask the kernel for arrival times; without them the host clock at read time is used.
         let _ = socket.set_recv_timestamp(true);
+        // Controller state changes (warning, passive, bus-off, restart) as error frames.
+        let _ = socket
+            .set_error_filter(libc::CAN_ERR_CRTL | libc::CAN_ERR_BUSOFF | libc::CAN_ERR_RESTARTED);
         SocketCanTransport {
             socket,
             name: name.to_string(),
             mtu,
+            health: Health::default(),
         }
     }
 
@@ -69,17 +75,79 @@ impl SocketCanTransport {
         self.socket.set_filters(&filters).map_err(|e| self.io(e))
     }
 
+    /// Writes one frame without waiting: `Ok(false)` when the kernel has no room (EAGAIN from a
+    /// full socket buffer, ENOBUFS from a full device queue).
+    fn write_now<F: AsPtr>(&self, frame: &F) -> Result<bool, TransportError> {
+        // SAFETY: socketcan's frame constructors zero the whole `can_frame`/`canfd_frame`
+        // before filling it, so every byte (padding included) is initialised — the same
+        // argument the crate's own `write_frame` makes for this call.
+        let bytes = unsafe { frame.as_bytes() };
+        match self
+            .socket
+            .as_raw_socket()
+            .send_with_flags(bytes, libc::MSG_DONTWAIT)
+        {
+            Ok(n) if n == bytes.len() => Ok(true),
+            Ok(n) => Err(TransportError::Io {
+                device: self.name.clone(),
+                source: std::io::Error::other(format!(
+                    "the kernel took {n} of a {}-byte CAN frame",
+                    bytes.len()
+                )),
+            }),
+            Err(e)
+                if e.kind() == ErrorKind::WouldBlock || e.raw_os_error() == Some(libc::ENOBUFS) =>
+            {
+                Ok(false)
+            }
+            Err(e) => Err(self.io(e)),
+        }
+    }
+
+    /// Takes a controller error frame into the health record.
+    fn absorb_error(&mut self, error: &CanError) {
+        for cause in error.causes() {
+            match cause {
+                ErrorCause::BusOff => self.health.bus_state = BusState::BusOff,
+                ErrorCause::Restarted => self.health.bus_state = BusState::Active,
+                ErrorCause::Controller(p) => {
+                    self.health.bus_state = controller_state(*p, self.health.bus_state);
+                    if p.intersects(ControllerProblems::RX_OVERFLOW) {
+                        self.health.overruns += 1;
+                    }
+                }
+                _ => continue,
+            }
+            self.health.status_reports += 1;
+        }
+    }
+
     fn io(&self, e: std::io::Error) -> TransportError {
         match e.kind() {
             ErrorKind::BrokenPipe | ErrorKind::NotConnected => {
                 TransportError::Closed(self.name.clone())
             }
-            _ if e.raw_os_error() == Some(19) => TransportError::Closed(self.name.clone()), // ENODEV
+            _ if matches!(e.raw_os_error(), Some(libc::ENODEV | libc::ENXIO)) => {
+                TransportError::Closed(self.name.clone())
+            }
             _ => TransportError::Io {
                 device: self.name.clone(),
                 source: e,
             },
         }
+    }
+}
+
+/// The state a `CAN_ERR_CRTL` report names (the kernel ORs RX and TX states together).
+fn controller_state(p: ControllerProblems, before: BusState) -> BusState {
+    if p.intersects(ControllerProblems::RX_PASSIVE | ControllerProblems::TX_PASSIVE) {
+        BusState::Passive
+    } else if p.intersects(ControllerProblems::RX_WARNING | ControllerProblems::TX_WARNING) {
+        BusState::Warning
+    } else if p.contains(ControllerProblems::ACTIVE) {
+        BusState::Active
+    } else {
+        before
     }
 }
 
@@ -96,16 +164,27 @@ impl CanTransport for SocketCanTransport {
                 self.mtu
             )));
         }
-        let result = if data.len() <= 8 {
+        let accepted = if data.len() <= 8 {
             let f = CanDataFrame::new(id, data)
                 .ok_or_else(|| TransportError::Unsupported("frame".into()))?;
-            self.socket.write_frame(&f)
+            self.write_now(&f)?
         } else {
             let f = CanFdFrame::new(id, data)
                 .ok_or_else(|| TransportError::Unsupported("frame".into()))?;
-            self.socket.write_frame(&f)
+            self.write_now(&f)?
         };
-        result.map_err(|e| self.io(e))
+        if accepted {
+            self.health.frames_sent += 1;
+            Ok(())
+        } else {
+            self.health.would_block += 1;
+            Err(TransportError::WouldBlock)
+        }
+    }
+
+    fn flush(&mut self, _deadline: std::time::Instant) -> Result<bool, TransportError> {
+        // A frame the kernel accepted is in its queue: nothing is held here.
+        Ok(true)
     }
 
     fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError> {
@@ -140,10 +219,15 @@ impl CanTransport for SocketCanTransport {
             let (raw, data): (u32, Vec<u8>) = match frame {
                 CanAnyFrame::Normal(f) if f.is_extended() => (f.id_word(), f.data().to_vec()),
                 CanAnyFrame::Fd(f) if f.is_extended() => (f.id_word(), f.data().to_vec()),
-                // Standard IDs, remote and error frames are not Cyphal.
+                CanAnyFrame::Error(f) => {
+                    self.absorb_error(&CanError::from(f));
+                    continue;
+                }
+                // Standard IDs and remote frames are not Cyphal.
                 _ => continue,
             };
             if let Some(f) = Frame::new(timestamp, raw & 0x1FFF_FFFF, &data) {
+                self.health.frames_received += 1;
                 return Ok(Some(f));
             }
         }
@@ -155,6 +239,10 @@ impl CanTransport for SocketCanTransport {
 
     fn name(&self) -> String {
         self.name.clone()
+    }
+
+    fn health(&self) -> Health {
+        self.health.clone()
     }
 }
 
@@ -186,6 +274,58 @@ mod tests {
         assert_eq!((x.id(), x.data()), (0x1060_642A, &[3u8, 0xE0][..]));
         assert_eq!((y.id(), y.data().len()), (0x0C64_D22A, 64));
         assert!(b.receive(Duration::from_millis(20)).unwrap().is_none());
+    }
+
+    #[test]
+    fn a_full_socket_refuses_without_blocking_and_counts() {
+        let (mut a, mut b) = pair();
+        let f = Frame::new(propid_core::time::Instant::ZERO, 0x1060_642A, &[1; 8]).unwrap();
+        let t0 = std::time::Instant::now();
+        let mut accepted = 0u64;
+        let err = loop {
+            match a.send(&f) {
+                Ok(()) => accepted += 1,
+                Err(e) => break e,
+            }
+            assert!(accepted < 1_000_000, "the socket never filled");
+        };
+        assert!(err.is_would_block(), "{err}");
+        assert!(t0.elapsed() < Duration::from_secs(1));
+        assert_eq!(a.health().frames_sent, accepted);
+        assert_eq!(a.health().would_block, 1);
+        // Draining one frame makes room again.
+        b.receive(Duration::from_secs(1)).unwrap().unwrap();
+        a.send(&f).unwrap();
+        assert!(a.flush(std::time::Instant::now()).unwrap());
+    }
+
+    #[test]
+    fn controller_error_frames_set_the_bus_state() {
+        let (a, mut b) = pair();
+        let report = |bits: u32, ctrl: u8| {
+            let mut data = [0u8; 8];
+            data[1] = ctrl;
+            let f = socketcan::CanErrorFrame::new_error(bits, &data).unwrap();
+            a.socket.write_frame(&f).unwrap();
+        };
+        assert_eq!(b.health().bus_state, BusState::Unknown);
+        report(libc::CAN_ERR_CRTL, libc::CAN_ERR_CRTL_TX_WARNING as u8);
+        assert!(b.receive(Duration::from_millis(50)).unwrap().is_none());
+        assert_eq!(b.health().bus_state, BusState::Warning);
+        report(
+            libc::CAN_ERR_CRTL,
+            (libc::CAN_ERR_CRTL_TX_PASSIVE | libc::CAN_ERR_CRTL_RX_OVERFLOW) as u8,
+        );
+        assert!(b.receive(Duration::from_millis(50)).unwrap().is_none());
+        assert_eq!(b.health().bus_state, BusState::Passive);
+        assert_eq!(b.health().overruns, 1);
+        report(libc::CAN_ERR_BUSOFF, 0);
+        assert!(b.receive(Duration::from_millis(50)).unwrap().is_none());
+        assert_eq!(b.health().bus_state, BusState::BusOff);
+        report(libc::CAN_ERR_RESTARTED, 0);
+        assert!(b.receive(Duration::from_millis(50)).unwrap().is_none());
+        assert_eq!(b.health().bus_state, BusState::Active);
+        assert_eq!(b.health().status_reports, 4);
     }
 
     #[test]
