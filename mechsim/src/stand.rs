@@ -86,6 +86,8 @@ pub struct MechStand {
     d: Derived,
     x: State,
     hold: Hold,
+    /// The observer's velocity estimate one control period ago (for its acceleration output).
+    previous_velocity_estimate: f64,
     rng: StdRng,
 }
 
@@ -156,6 +158,7 @@ impl MechStand {
                 theta_meas: 0.0,
                 brake: 0.0,
             },
+            previous_velocity_estimate: 0.0,
             rng: StdRng::seed_from_u64(seed),
         })
     }
@@ -323,7 +326,10 @@ impl MechStand {
         let x = &self.x;
         let (velocity, rate) = match self.d.pll {
             None => (x[W], f.acceleration),
-            Some((_, k2)) => (x[WH], k2 * (self.hold.theta_meas - x[THH])),
+            // Not k2·e at the tick: right after a new angle sample e jumps by the angle travelled
+            // in a period (ω·h), which would add a term ∝ ω. The observer's mean rate over the
+            // last period is what a discrete observer reports (h/2 later than ω̂).
+            Some(_) => (x[WH], (x[WH] - self.previous_velocity_estimate) / self.d.h),
         };
         let acceleration = if self.c.sensing.kinematics.acceleration_filter > 0.0 {
             x[AH]
@@ -491,6 +497,7 @@ impl MechStand {
                 }
             }
             if tick < total_ticks {
+                self.previous_velocity_estimate = self.x[WH];
                 self.rk4(tp);
             }
         }
