@@ -110,7 +110,7 @@ pub struct Bearing {
 pub struct Cogging {
     /// A: amplitude [N·m] (0: none).
     pub amplitude: f64,
-    /// n: periods per revolution.
+    /// n: periods per revolution (a whole number).
     pub harmonic: f64,
     /// φ: phase [rad].
     pub phase: f64,
@@ -457,7 +457,14 @@ impl MechConfig {
         positive("rotor.bearing.stribeck_speed", r.bearing.stribeck_speed)?;
         non_negative("rotor.bearing.viscous", r.bearing.viscous)?;
         non_negative("rotor.cogging.amplitude", r.cogging.amplitude)?;
-        positive("rotor.cogging.harmonic", r.cogging.harmonic)?;
+        check(
+            "rotor.cogging.harmonic",
+            r.cogging.harmonic,
+            "a whole number ≥ 1",
+            r.cogging.harmonic >= 1.0
+                && r.cogging.harmonic.fract() == 0.0
+                && r.cogging.harmonic <= 1e6,
+        )?;
         finite("rotor.cogging.phase", r.cogging.phase)?;
 
         let m = &self.motor;

@@ -88,6 +88,8 @@ pub struct MechStand {
     hold: Hold,
     /// The observer's velocity estimate one control period ago (for its acceleration output).
     previous_velocity_estimate: f64,
+    /// Whole turns taken out of the angle states θ and θ̂ (they are kept in [0, 2π)).
+    turns: f64,
     rng: StdRng,
 }
 
@@ -159,6 +161,7 @@ impl MechStand {
                 brake: 0.0,
             },
             previous_velocity_estimate: 0.0,
+            turns: 0.0,
             rng: StdRng::seed_from_u64(seed),
         })
     }
@@ -191,13 +194,16 @@ impl MechStand {
         }
     }
 
-    fn forces(&self, t: f64, x: &State, hold: &Hold) -> Forces {
+    /// Torques at state `x` with the disturbance torque `disturbance`.
+    fn forces(&self, disturbance: f64, x: &State, hold: &Hold) -> Forces {
         let r = &self.c.rotor;
         let w = x[W];
         let s = self.sgn(w);
         let current = self.current(x, hold);
         let motor = self.c.motor.kt * current;
         let cogging = if r.cogging.amplitude != 0.0 {
+            // θ is kept within a turn (see `run`) and n is an integer, so the argument stays small
+            // (sin of a large argument takes glibc's slow path).
             r.cogging.amplitude * (r.cogging.harmonic * x[TH] + r.cogging.phase).sin()
         } else {
             0.0
@@ -206,8 +212,10 @@ impl MechStand {
         let b = &r.bearing;
         let mut bearing = b.viscous * w;
         if b.coulomb != 0.0 || b.breakaway != 0.0 {
-            let stribeck = if b.breakaway > 0.0 {
-                let v = w / b.stribeck_speed;
+            let v = w / b.stribeck_speed;
+            // exp(−50) < 2·10⁻²²: beyond that the term is below f64 resolution of F_c, and exp's
+            // underflow path is slow.
+            let stribeck = if b.breakaway > 0.0 && v * v < 50.0 {
                 (b.breakaway - b.coulomb) * (-v * v).exp()
             } else {
                 0.0
@@ -224,7 +232,22 @@ impl MechStand {
         if dr.cq_slope != 0.0 {
             drag *= 1.0 + dr.cq_slope * (aw / dr.cq_reference_speed - 1.0);
         }
-        let disturbance = match self.c.disturbance {
+        Forces {
+            current,
+            motor,
+            cogging,
+            brake,
+            bearing,
+            drag,
+            disturbance,
+            rotor_stator: motor + cogging + brake - bearing,
+            acceleration: (motor + cogging + brake - bearing - drag + disturbance) / r.inertia,
+        }
+    }
+
+    /// The external disturbance at pattern time `t`.
+    fn disturbance(&self, t: f64) -> f64 {
+        match self.c.disturbance {
             Disturbance::None => 0.0,
             Disturbance::Periodic { amplitude, hz } => {
                 amplitude * (std::f64::consts::TAU * hz * t).sin()
@@ -240,25 +263,12 @@ impl MechStand {
                     0.0
                 }
             }
-        };
-        let rotor_stator = motor + cogging + brake - bearing;
-        let acceleration = (rotor_stator - drag + disturbance) / r.inertia;
-        Forces {
-            current,
-            motor,
-            cogging,
-            brake,
-            bearing,
-            drag,
-            disturbance,
-            rotor_stator,
-            acceleration,
         }
     }
 
-    /// dx/dt. `t` is the pattern time (for the disturbance).
-    fn deriv(&self, t: f64, x: &State, hold: &Hold) -> State {
-        let f = self.forces(t, x, hold);
+    /// dx/dt, the disturbance torque given.
+    fn deriv(&self, disturbance: f64, x: &State, hold: &Hold) -> State {
+        let f = self.forces(disturbance, x, hold);
         let mut dx = [0.0; N];
         let w = x[W];
         if self.d.loop_on {
@@ -312,10 +322,15 @@ impl MechStand {
             }
             o
         };
-        let k1 = self.deriv(t, &x, &hold);
-        let k2 = self.deriv(t + h / 2.0, &add(&x, &k1, h / 2.0), &hold);
-        let k3 = self.deriv(t + h / 2.0, &add(&x, &k2, h / 2.0), &hold);
-        let k4 = self.deriv(t + h, &add(&x, &k3, h), &hold);
+        let (d0, d1, d2) = (
+            self.disturbance(t),
+            self.disturbance(t + h / 2.0),
+            self.disturbance(t + h),
+        );
+        let k1 = self.deriv(d0, &x, &hold);
+        let k2 = self.deriv(d1, &add(&x, &k1, h / 2.0), &hold);
+        let k3 = self.deriv(d1, &add(&x, &k2, h / 2.0), &hold);
+        let k4 = self.deriv(d2, &add(&x, &k3, h), &hold);
         for i in 0..N {
             self.x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         }
@@ -418,9 +433,17 @@ impl MechStand {
             };
             let torque_command = setpoint * c.drive.max_torque;
             self.hold.i_ref = torque_command / self.d.kt_nominal;
+            // Whole turns out of θ and θ̂ together: the observer's error and the cogging phase are
+            // unchanged, and the counter's count changes by a whole number of turns.
+            let k = (self.x[TH] / std::f64::consts::TAU).floor();
+            if k != 0.0 {
+                self.x[TH] -= k * std::f64::consts::TAU;
+                self.x[THH] -= k * std::f64::consts::TAU;
+                self.turns += k;
+            }
             self.hold.theta_meas = self.quantise(self.x[TH]);
             if let Some(b) = c.drive.braking {
-                let f = self.forces(tp, &self.x, &self.hold);
+                let f = self.forces(self.disturbance(tp), &self.x, &self.hold);
                 let (_, a_est) = self.estimates(&f);
                 braking = if braking {
                     a_est <= -b.off_threshold
@@ -442,7 +465,7 @@ impl MechStand {
                     let dropped = link.drop_probability > 0.0
                         && self.rng.random::<f64>() < link.drop_probability;
                     if !dropped {
-                        let f = self.forces(tp, &self.x, &self.hold);
+                        let f = self.forces(self.disturbance(tp), &self.x, &self.hold);
                         let (v_est, a_est) = self.estimates(&f);
                         let force = match c.sensing.torque {
                             TorqueReport::Setpoint => torque_command,
@@ -483,7 +506,7 @@ impl MechStand {
                                 rotor_stator_torque: f.rotor_stator,
                                 velocity: self.x[W],
                                 acceleration: f.acceleration,
-                                position: self.x[TH],
+                                position: self.x[TH] + std::f64::consts::TAU * self.turns,
                                 energy: Energy {
                                     drive: self.x[ED],
                                     loss: self.x[EL],
