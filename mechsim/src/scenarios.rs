@@ -27,6 +27,11 @@ pub struct Bench {
     pub hi: f64,
     /// Pattern duration [s].
     pub duration: f64,
+    /// The highest frequency the pattern excites [Hz] (1/period for the seed's sine, 10/period
+    /// for propid's chirp). A 2nd-order stage of natural frequency f_n has the low-frequency
+    /// delay 2ζ/ω_n, but the first-order lag that matches it up to f is longer by a factor
+    /// 1 + (f/f_n)² (phase series of both to third order); that goes into `derivation_error`.
+    pub max_hz: f64,
 }
 
 impl Bench {
@@ -272,7 +277,7 @@ impl Hidden {
             }
             Hidden::CurrentSenseFilter => "first-order current-sense filter, time constant [s]",
             Hidden::VelocityObserver => {
-                "4096-count angle, PLL observer, natural frequency [Hz], ζ = 1/√2"
+                "4096-count angle, PLL observer, natural frequency [Hz] (25–80), ζ = 1/√2"
             }
             Hidden::AccelerationFilter => {
                 "first-order filter on the acceleration estimate, time constant [s]"
@@ -342,7 +347,8 @@ impl Hidden {
                 (tau, effect("force_sensor_lag", tau, "s", true))
             }
             Hidden::VelocityObserver => {
-                let fn_hz = uniform(rng, 10.0, 60.0);
+                // 25–80 Hz: sensorless observers and encoder PLLs of small drives.
+                let fn_hz = uniform(rng, 25.0, 80.0);
                 let zeta = std::f64::consts::FRAC_1_SQRT_2;
                 c.sensing.kinematics.counts_per_rev = Some(4096);
                 c.sensing.kinematics.velocity = VelocityEstimator::Pll {
@@ -369,7 +375,7 @@ impl Hidden {
                         unit: "s",
                         in_diagnose_today: true,
                         ambiguous_with: None,
-                        derivation_error: h / (2.0 * d),
+                        derivation_error: h / (2.0 * d) + (bench.max_hz / fn_hz).powi(2),
                     }),
                 )
             }
@@ -397,8 +403,19 @@ impl Hidden {
                 // force_sensor_lag = 2ζ/ω_n + 1/(2·rate). The hold also leaves a sawtooth error of
                 // RMS |Ḟ|·T/√12 that looks like noise.
                 let wn = std::f64::consts::TAU * natural_hz;
-                let lag = 2.0 * damping / wn + 0.5 / rate;
-                (rate, effect("force_sensor_lag", lag, "s", true))
+                let cell = 2.0 * damping / wn;
+                let lag = cell + 0.5 / rate;
+                (
+                    rate,
+                    Expect::Effect(ExpectedEffect {
+                        name: "force_sensor_lag",
+                        value: lag,
+                        unit: "s",
+                        in_diagnose_today: true,
+                        ambiguous_with: None,
+                        derivation_error: cell / lag * (bench.max_hz / natural_hz).powi(2),
+                    }),
+                )
             }
             Hidden::ForceOffset => {
                 let offset = signed(rng, 2e-3, 8e-3);

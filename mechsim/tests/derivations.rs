@@ -20,6 +20,7 @@ fn bench() -> Bench {
         lo: 0.1,
         hi: 0.9,
         duration: 12.0,
+        max_hz: F,
     }
 }
 
@@ -256,4 +257,34 @@ fn voltage_limit_is_a_high_speed_shortfall() {
         slowest > 0.6 * w_hi,
         "shortfall from {slowest} rad/s, top speed {w_hi}"
     );
+}
+
+/// Every kind draws a valid stand at every feedback rate from 100 Hz to 1 kHz, and the magnitude
+/// stays within the stated range across many draws.
+#[test]
+fn every_draw_is_a_valid_stand_at_every_rate() {
+    let mut rng = StdRng::seed_from_u64(99);
+    for rate in [100.0, 200.0, 250.0, 500.0, 1000.0] {
+        let mut b = bench();
+        b.base.link.rate = rate;
+        b.base = b.base.with_typical_noise();
+        for hidden in Hidden::ALL {
+            for _ in 0..50 {
+                let s = hidden.draw(&b, &mut rng);
+                if let Err(e) = s.config.validate() {
+                    panic!("{} at {rate} Hz: {e}", hidden.name());
+                }
+                assert!(s.magnitude.is_finite());
+                if let Expect::Effect(e) = s.expect {
+                    assert!(e.value.is_finite() && e.value != 0.0, "{}", hidden.name());
+                    assert!(
+                        e.derivation_error < 0.05,
+                        "{}: {}",
+                        hidden.name(),
+                        e.derivation_error
+                    );
+                }
+            }
+        }
+    }
 }
