@@ -13,8 +13,10 @@
 use rand::Rng;
 
 use crate::config::{
-    Braking, CurrentLoop, Disturbance, MechConfig, TorqueReport, VelocityEstimator,
+    Braking, ConfigError, CurrentLoop, Disturbance, MechConfig, Run, TorqueReport,
+    VelocityEstimator,
 };
+use crate::record::Record;
 
 /// The clean stand a scenario is drawn on, and the run it will be used for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,6 +145,31 @@ pub struct Scenario {
     pub expect: Expect,
     /// What its extended model finds for J and the drag law.
     pub fit: ExpectedFit,
+    /// The bench it was drawn on.
+    pub bench: Bench,
+}
+
+impl Scenario {
+    /// The run the scenario was drawn for: the seed's init phase (5 s at `hi`), then the pattern
+    /// for the bench's duration.
+    pub fn run(&self) -> Run {
+        Run {
+            init_setpoint: self.bench.hi,
+            init_duration: 5.0,
+            duration: self.bench.duration,
+        }
+    }
+
+    /// Simulates the scenario with `pattern` and noise seed `seed`. Fails only if the bench
+    /// itself is invalid (every kind draws a valid stand from a valid bench at 100–1000 Hz:
+    /// `tests/derivations.rs`).
+    pub fn simulate(
+        &self,
+        pattern: impl Fn(f64) -> f64,
+        seed: u64,
+    ) -> Result<Vec<Record>, ConfigError> {
+        crate::simulate(self.config, &self.run(), pattern, seed)
+    }
 }
 
 /// The hidden mechanisms.
@@ -619,6 +646,7 @@ impl Hidden {
             magnitude,
             expect,
             fit,
+            bench: *bench,
         }
     }
 }

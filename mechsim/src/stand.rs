@@ -80,7 +80,7 @@ struct Derived {
     cell: Option<(f64, f64)>,
 }
 
-/// A mechanism-level stand that runs one recording from rest.
+/// A mechanism-level stand that runs one recording from rest ([`MechStand::run`] consumes it).
 pub struct MechStand {
     c: MechConfig,
     d: Derived,
@@ -372,7 +372,7 @@ impl MechStand {
     /// Cost: about 0.1 µs of CPU per control period and state (13 states, RK4); see the crate
     /// documentation for the measured figure.
     pub fn run(
-        &mut self,
+        mut self,
         run: &Run,
         pattern: impl Fn(f64) -> f64,
         mut sink: impl FnMut(&Record),
@@ -536,7 +536,7 @@ pub fn simulate(
     pattern: impl Fn(f64) -> f64,
     seed: u64,
 ) -> Result<Vec<Record>, ConfigError> {
-    let mut stand = MechStand::new(config, seed)?;
+    let stand = MechStand::new(config, seed)?;
     let mut out = Vec::with_capacity((run.duration * config.link.rate) as usize + 2);
     stand.run(run, pattern, |r| out.push(*r))?;
     Ok(out)

@@ -6,7 +6,7 @@
 //! L for the lags drawn (≤ 25 ms); for the 2nd-order stages the correction is smaller still.
 
 use propid_mechsim::scenarios::{Bench, Expect, Hidden, Scenario};
-use propid_mechsim::{pattern, simulate, MechConfig, Record, Run};
+use propid_mechsim::{pattern, MechConfig, Record};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 
@@ -25,12 +25,7 @@ fn bench() -> Bench {
 }
 
 fn records(s: &Scenario, b: &Bench) -> Vec<Record> {
-    let run = Run {
-        init_setpoint: b.hi,
-        init_duration: 3.0,
-        duration: b.duration,
-    };
-    simulate(s.config, &run, pattern::sine(b.lo, b.hi, 1.0 / F), 7).unwrap()
+    s.simulate(pattern::sine(b.lo, b.hi, 1.0 / F), 7).unwrap()
 }
 
 /// Phase [rad] of the 1 Hz component of `y` (time from the truth), over the last 10 whole periods.
