@@ -64,5 +64,5 @@ pub use config::{
     Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run, Sensing, TorqueReport,
     VelocityEstimator,
 };
-pub use record::{write_tsv, Energy, Record, Truth, TSV_HEADER};
+pub use record::{write_tsv, Energy, Record, Truth, TsvSink, TSV_HEADER};
 pub use stand::{simulate, MechStand};

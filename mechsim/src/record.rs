@@ -89,42 +89,67 @@ fn push_number(line: &mut String, v: f64) {
     }
 }
 
-/// Writes `records` as propid's TSV: the header line, then one row per record, numbers formatted
+/// Streams records as propid's TSV: the header line, then one row per record, numbers formatted
 /// as Rust's `{}` (shortest round-trip), NaN as `nan` — the same bytes propid's own writer makes.
 /// With `with_setpoint`, a `setpoint` column follows `position` (propid's reader finds columns by
 /// name and ignores the ones it does not know).
-pub fn write_tsv<W: Write>(
-    mut out: W,
-    records: &[Record],
+pub struct TsvSink<W: Write> {
+    out: W,
     with_setpoint: bool,
-) -> std::io::Result<()> {
-    let mut line = TSV_HEADER.join("\t");
-    if with_setpoint {
-        line.push_str("\tsetpoint");
+    line: String,
+}
+
+impl<W: Write> TsvSink<W> {
+    /// Writes the header.
+    pub fn new(mut out: W, with_setpoint: bool) -> std::io::Result<Self> {
+        let mut line = TSV_HEADER.join("\t");
+        if with_setpoint {
+            line.push_str("\tsetpoint");
+        }
+        line.push('\n');
+        out.write_all(line.as_bytes())?;
+        Ok(TsvSink {
+            out,
+            with_setpoint,
+            line,
+        })
     }
-    line.push('\n');
-    out.write_all(line.as_bytes())?;
-    for r in records {
-        line.clear();
-        let mut fields = vec![
+
+    /// Writes one row.
+    pub fn write(&mut self, r: &Record) -> std::io::Result<()> {
+        self.line.clear();
+        let fields = [
             r.ts_local,
             r.t,
             r.force,
             r.velocity,
             r.acceleration,
             r.position,
+            r.setpoint,
         ];
-        if with_setpoint {
-            fields.push(r.setpoint);
-        }
-        for (i, v) in fields.into_iter().enumerate() {
+        let n = if self.with_setpoint { 7 } else { 6 };
+        for (i, v) in fields[..n].iter().enumerate() {
             if i > 0 {
-                line.push('\t');
+                self.line.push('\t');
             }
-            push_number(&mut line, v);
+            push_number(&mut self.line, *v);
         }
-        line.push('\n');
-        out.write_all(line.as_bytes())?;
+        self.line.push('\n');
+        self.out.write_all(self.line.as_bytes())
     }
-    out.flush()
+
+    /// Flushes and returns the writer.
+    pub fn finish(mut self) -> std::io::Result<W> {
+        self.out.flush()?;
+        Ok(self.out)
+    }
+}
+
+/// Writes `records` through a [`TsvSink`].
+pub fn write_tsv<W: Write>(out: W, records: &[Record], with_setpoint: bool) -> std::io::Result<()> {
+    let mut sink = TsvSink::new(out, with_setpoint)?;
+    for r in records {
+        sink.write(r)?;
+    }
+    sink.finish().map(|_| ())
 }
