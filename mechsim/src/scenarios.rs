@@ -6,6 +6,25 @@
 //! `scenario.config` with any pattern, and checks the diagnosis against `scenario.expect` and
 //! `scenario.fit`.
 //!
+//! ```
+//! use propid_mechsim::scenarios::{Bench, Expect, Hidden};
+//! use propid_mechsim::{pattern, MechConfig};
+//! use rand::SeedableRng;
+//!
+//! let mut base = MechConfig::default().with_typical_noise(); // propid's default noise
+//! base.link.rate = 500.0;
+//! let bench = Bench { base, lo: 0.1, hi: 0.9, duration: 3.0, max_hz: 5.0 };
+//! let mut rng = rand::rngs::StdRng::seed_from_u64(1);
+//! let s = Hidden::CurrentLoopDemand.draw(&bench, &mut rng);
+//! let records = s.simulate(pattern::chirp(0.1, 0.9, 2.0, bench.duration), 7).unwrap();
+//! assert_eq!(records.len(), 1501);
+//! // records[i].{t, force, velocity, acceleration, position} are the TSV columns (propid's Sample).
+//! let Expect::Effect(e) = s.expect else { unreachable!() };
+//! assert_eq!(e.name, "torque_lag");
+//! assert!(e.value > 2.5e-3 && e.value < 20.1e-3); // 1/ω_c + h/2
+//! assert_eq!(s.fit.inertia, 2e-5); // the extended model's J
+//! ```
+//!
 //! The expected values are derived analytically from the mechanism, not from the diagnosis's
 //! equations; each derivation is written where the value is computed, and `tests/derivations.rs`
 //! measures each one on simulated data (truth against report) to within 3 %.
