@@ -5,7 +5,7 @@
 //! periods); for a first-order lag L, φ/ω = atan(ωL)/ω = L·(1 − (ωL)²/3 + …), under 0.6 % short of
 //! L for the lags drawn (≤ 25 ms); for the 2nd-order stages the correction is smaller still.
 
-use propid_mechsim::scenarios::{Bench, Expect, Hidden, Scenario};
+use propid_mechsim::scenarios::{Bench, Condition, Expect, Hidden, Scenario, Where};
 use propid_mechsim::{pattern, MechConfig, Record};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
@@ -224,8 +224,51 @@ fn every_derivation_holds_on_simulated_data() {
                         .fold(0.0, f64::max);
                     assert!(worst < 1e-12, "{name}: report differs from the felt torque");
                 }
-                Hidden::PeriodicDisturbance | Hidden::Gust | Hidden::VoltageLimit => {
-                    assert!(matches!(s.expect, Expect::Unexplained { .. }));
+                Hidden::PeriodicDisturbance => {
+                    let Expect::Unexplained {
+                        at: Where::Periodic { hz },
+                        ..
+                    } = s.expect
+                    else {
+                        panic!("{name}: {:?}", s.expect)
+                    };
+                    // Amplitude of the truth's external torque at that frequency (lock-in).
+                    let w = std::f64::consts::TAU * hz;
+                    let (mut a, mut c, mut n) = (0.0, 0.0, 0.0);
+                    for r in &recs {
+                        a += r.truth.disturbance * (w * r.truth.time).sin();
+                        c += r.truth.disturbance * (w * r.truth.time).cos();
+                        n += 1.0;
+                    }
+                    close(&name, 2.0 * (a * a + c * c).sqrt() / n, s.magnitude, 0.01);
+                }
+                Hidden::Gust => {
+                    let Expect::Unexplained {
+                        at: Where::TimeWindow { from, to },
+                        ..
+                    } = s.expect
+                    else {
+                        panic!("{name}: {:?}", s.expect)
+                    };
+                    assert!(to <= b.duration && from >= 0.75 * b.duration);
+                    for r in &recs {
+                        let inside = r.truth.time > from && r.truth.time < to;
+                        assert_eq!(
+                            r.truth.disturbance != 0.0,
+                            inside,
+                            "{name} at {}",
+                            r.truth.time
+                        );
+                    }
+                }
+                Hidden::VoltageLimit => {
+                    assert!(matches!(
+                        s.expect,
+                        Expect::Unexplained {
+                            at: Where::Condition(Condition::HighSpeed),
+                            ..
+                        }
+                    ));
                 }
             }
         }
