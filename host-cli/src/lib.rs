@@ -10,6 +10,7 @@
 //!  propid-io         the TSV sample stream, importers, candump logs
 //!  propid-science    excitation, stand simulators, fit, diagnosis
 //!  propid-drive      the driver and the simulated Telega
+//!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
 //!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
 //! ```
 #![deny(missing_docs)]
