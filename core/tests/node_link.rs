@@ -143,7 +143,7 @@ fn heartbeats_get_info_and_pub_sub_over_classic_and_fd() {
         assert_eq!(b.setpoints.len(), 2000);
         assert_eq!(a.feedback.len(), 1000);
         assert_eq!(a.feedback[999].value.kinematics.base.velocity, 9990.0);
-        assert_eq!(driver.stats().tx_expired, 0);
+        assert_eq!(driver.stats().tx.expired, 0);
     }
 }
 

@@ -172,7 +172,7 @@ fn main() -> ! {
     let stats = node.stats();
     hprintln!(
         "firmware-demo: {} CAN frames ({} bytes) sent, {} heartbeats, {} frames expired in the queue",
-        can.transmitted, can.bytes, stats.heartbeats, stats.tx_expired
+        can.transmitted, can.bytes, stats.heartbeats, stats.tx.expired
     );
     hprintln!("firmware-demo: {} instructions per SysTick tick (calibrated)", ipt);
     hprintln!("firmware-demo: cost: estimator update {} instructions, DoF3rdTs encode into {} frames {} instructions", update_instr as u32, frames / N, encode_instr as u32);

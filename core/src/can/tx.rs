@@ -20,6 +20,8 @@ pub enum TxError {
     InvalidHeader,
     /// The transmit queue is full.
     QueueFull,
+    /// Every port slot of the node is taken (transfer-ID counters or response subscriptions).
+    TooManyPorts,
 }
 
 impl core::fmt::Display for TxError {
@@ -29,6 +31,7 @@ impl core::fmt::Display for TxError {
             TxError::AnonymousService => "service transfers cannot be anonymous",
             TxError::InvalidHeader => "a header field is out of range",
             TxError::QueueFull => "the transmit queue is full",
+            TxError::TooManyPorts => "every port slot of the node is taken",
         })
     }
 }
