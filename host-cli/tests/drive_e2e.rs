@@ -10,8 +10,10 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use propid_core::dsdl::Readiness;
-use propid_drive::drive::{drive, DriveConfig, StopReason};
+use propid_drive::drive::{run_drive, DriveConfig};
+use propid_drive::realtime::SystemClock;
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig, SimDriveSummary};
+use propid_drive::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 use propid_slcan::SlcanTransport;
@@ -31,7 +33,7 @@ fn start_telega(
     let s = Arc::clone(&stop);
     let handle = std::thread::spawn(move || {
         let mut t = SlcanTransport::from_port(Box::new(port), "telega");
-        run_sim_drive(&sim_cfg(), &mut t, &s)
+        run_sim_drive(sim_cfg(), &mut t, &SystemClock, &s)
     });
     (stop, handle)
 }
@@ -72,16 +74,28 @@ fn drives_the_simulated_telega_and_fits_it() {
     };
     let mut out = Vec::new();
     let mut t = SlcanTransport::from_port(Box::new(drive_end), "driver");
-    let outcome = drive(&cfg, &mut t, &mut out, &AtomicBool::new(false), &mut |_| {});
+    let outcome = run_drive(
+        cfg,
+        &mut t,
+        &SystemClock,
+        &AtomicBool::new(false),
+        &mut out,
+        &mut |_| {},
+    );
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     let summary = telega.join().unwrap().unwrap();
-    assert_eq!(outcome.reason, StopReason::Completed);
+    assert_eq!(outcome.report.reason, StopReason::Completed);
+    assert!(outcome.standby_delivered(true), "{outcome:?}");
     let text = String::from_utf8(out).unwrap();
     let rows = check_tsv(&text);
     // 10 s of feedback at 500 Hz; scheduling on a loaded CI machine may lose a few percent.
-    assert!((4500..=5010).contains(&rows), "{rows} rows");
-    assert_eq!(rows as u64, outcome.rows);
+    assert!(
+        (4500..=5010).contains(&rows),
+        "{rows} rows; {} feedback published",
+        summary.feedback_published
+    );
+    assert_eq!(rows as u64, outcome.report.rows);
     assert_eq!(
         summary.last_readiness,
         Some(Readiness::STANDBY),
@@ -179,7 +193,10 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
     let cases: [(&[(&str, &str)], &str); 4] = [
         (&[("SETPOINT_RAT_LO_HI", "0.9 0.1")], "lo < hi"),
         (&[("SETPOINT_RAT_LO_HI", "0.1 1.5")], "lo < hi ≤ 1"),
-        (&[("UAVCAN__SUB__FB_DYN__ID", "")], "feedback id is not set"),
+        (
+            &[("UAVCAN__SUB__FB_DYN__ID", "")],
+            "feedback subject-ID is not set",
+        ),
         (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
     ];
     for (env, want) in cases {
