@@ -3,7 +3,7 @@
 //! ```text
 //!  loop:
 //!    stop flag raised? ─► machine.handle_fault(Signal)
-//!    transport health: bus-off / adapter refusal ─► machine.handle_fault(..)
+//!    transport.health(): bus-off / adapter refusal (BELL) ─► machine.handle_fault(..)
 //!    machine.poll_transmit ─► transport.send ── WouldBlock ─► machine.handle_blocked (counted)
 //!                                           └── fault ─────► machine.handle_fault (the link is dead:
 //!                                                            nothing more is written to it)
@@ -18,7 +18,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use propid_core::time::Instant;
-use propid_transport::{CanTransport, HostClock, TransportError};
+use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
 
 use crate::{Machine, StopReason};
 
@@ -65,17 +65,29 @@ enum Outcome {
 
 fn classify(e: &TransportError) -> Outcome {
     match e {
-        TransportError::Io { source, .. }
-            if matches!(
-                source.kind(),
-                std::io::ErrorKind::TimedOut | std::io::ErrorKind::WouldBlock
-            ) =>
-        {
-            Outcome::Blocked
-        }
+        TransportError::WouldBlock => Outcome::Blocked,
         TransportError::Closed(what) => Outcome::Fault(StopReason::DeviceVanished(what.clone())),
+        TransportError::Refused { command, .. } => {
+            Outcome::Fault(StopReason::AdapterRefused(command.clone()))
+        }
         other => Outcome::Fault(StopReason::Transport(other.to_string())),
     }
+}
+
+/// A fault the transport's counters show since `seen`: the controller went bus-off, or the
+/// adapter refused a line (SLCAN BELL).
+fn health_fault(now: &Health, seen: &Health) -> Option<StopReason> {
+    if now.bus_state == BusState::BusOff && seen.bus_state != BusState::BusOff {
+        return Some(StopReason::BusOff);
+    }
+    if now.refused > seen.refused {
+        let line = now
+            .last_refused
+            .clone()
+            .unwrap_or_else(|| "a line it was sent".into());
+        return Some(StopReason::AdapterRefused(line));
+    }
+    None
 }
 
 /// Runs `machine` on `transport` in real time until it stops; its events go to `sink`.
@@ -90,11 +102,19 @@ pub fn run_realtime<M: Machine>(
     let mut signalled = false;
     let mut dead: Option<String> = None;
     let mut lost = 0u64;
+    let mut seen = transport.health();
     loop {
         let now = clock.now();
         if !signalled && stop.load(Ordering::Relaxed) {
             signalled = true;
             machine.handle_fault(now, StopReason::Signal);
+        }
+        if dead.is_none() {
+            let health = transport.health();
+            if let Some(reason) = health_fault(&health, &seen) {
+                machine.handle_fault(now, reason);
+            }
+            seen = health;
         }
         while let Some(frame) = machine.poll_transmit(now) {
             if dead.is_some() {
@@ -145,8 +165,14 @@ pub fn run_realtime<M: Machine>(
             },
         }
     }
+    // The stop commands were accepted whole; make sure their bytes leave too.
+    let flushed = dead.is_none()
+        && lost == 0
+        && transport
+            .flush(std::time::Instant::now() + FLUSH_BOUND)
+            .unwrap_or(false);
     RunOutcome {
-        flushed: dead.is_none() && lost == 0,
+        flushed,
         lost_to_fault: lost,
         link_fault: dead,
     }

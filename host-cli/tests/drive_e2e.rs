@@ -32,7 +32,7 @@ fn start_telega(
     let stop = Arc::new(AtomicBool::new(false));
     let s = Arc::clone(&stop);
     let handle = std::thread::spawn(move || {
-        let mut t = SlcanTransport::from_port(Box::new(port), "telega");
+        let mut t = SlcanTransport::from_tty(port, "telega").unwrap();
         run_sim_drive(sim_cfg(), &mut t, &SystemClock, &s)
     });
     (stop, handle)
@@ -73,7 +73,7 @@ fn drives_the_simulated_telega_and_fits_it() {
         })
     };
     let mut out = Vec::new();
-    let mut t = SlcanTransport::from_port(Box::new(drive_end), "driver");
+    let mut t = SlcanTransport::from_tty(drive_end, "driver").unwrap();
     let outcome = run_drive(
         cfg,
         &mut t,
@@ -193,10 +193,7 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
     let cases: [(&[(&str, &str)], &str); 4] = [
         (&[("SETPOINT_RAT_LO_HI", "0.9 0.1")], "lo < hi"),
         (&[("SETPOINT_RAT_LO_HI", "0.1 1.5")], "lo < hi ≤ 1"),
-        (
-            &[("UAVCAN__SUB__FB_DYN__ID", "")],
-            "feedback subject-ID is not set",
-        ),
+        (&[("UAVCAN__SUB__FB_DYN__ID", "")], "feedback id is not set"),
         (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
     ];
     for (env, want) in cases {
