@@ -137,7 +137,11 @@ fn run(fault: Fault) {
         ),
         Fault::BusOff => assert_eq!(r.reason, StopReason::BusOff),
         Fault::Vanished => {
-            assert!(matches!(r.reason, StopReason::DeviceVanished(_)), "{:?}", r.reason);
+            assert!(
+                matches!(r.reason, StopReason::DeviceVanished(_)),
+                "{:?}",
+                r.reason
+            );
             assert!(!outcome.link.flushed);
             assert!(!outcome.standby_delivered(true));
             assert!(outcome.link.link_fault.is_some());
