@@ -4,6 +4,7 @@
 
 mod common;
 
+use std::os::fd::AsRawFd;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -216,4 +217,70 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
         // Refused before the interface was touched.
         assert!(!err.contains("null-not-opened"), "{err}");
     }
+}
+
+#[test]
+fn the_serial_device_vanishing_midway_stops_with_a_clear_reason_and_every_row() {
+    let (telega_end, driver_end) = TTYPort::pair().unwrap();
+    // The child must not inherit the simulated drive's end, or it never closes.
+    for raw in [telega_end.as_raw_fd(), driver_end.as_raw_fd()] {
+        // SAFETY: `raw` is an open descriptor owned by a TTYPort that outlives this borrow.
+        let fd = unsafe { std::os::fd::BorrowedFd::borrow_raw(raw) };
+        rustix::io::fcntl_setfd(fd, rustix::io::FdFlags::CLOEXEC).unwrap();
+    }
+    let path = driver_end.name().expect("the pty has a path");
+    let (stop, telega) = start_telega(telega_end);
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("run.tsv");
+    let child = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .args([
+            "drive",
+            "--iface",
+            &format!("slcan:{path}"),
+            "--pattern-duration",
+            "60",
+            "--init-duration",
+            "0.5",
+            "--deadman",
+            "5",
+            "-o",
+        ])
+        .arg(&tsv)
+        .env("UAVCAN__NODE__ID", "10")
+        .env("UAVCAN__PUB__READINESS__ID", "10")
+        .env("UAVCAN__PUB__SP_RAT__ID", "24")
+        .env("UAVCAN__SUB__FB_DYN__ID", "110")
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while std::fs::read_to_string(&tsv)
+        .map(|s| s.lines().count())
+        .unwrap_or(0)
+        <= 201
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "no feedback recorded"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // Unplug: the other end of the pseudo-terminal closes (the simulated drive's thread ends and
+    // drops it; the test's own handle on the device side goes too).
+    stop.store(true, Ordering::Relaxed);
+    telega.join().unwrap().unwrap();
+    drop(driver_end);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("device vanished"), "{err}");
+    assert!(err.contains("NOT confirmed sent"), "{err}");
+    let rows = check_tsv(&std::fs::read_to_string(&tsv).unwrap());
+    let reported: usize = err
+        .split(" rows written")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(rows, reported, "every row counted reached the file");
 }
