@@ -7,7 +7,9 @@ use std::time::Duration;
 use propid_core::can::Frame;
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::time::Instant;
-use propid_drive::drive::{Drive, DriveConfig, DriveEvent, Phase, StopReport, STOP_WINDOW};
+use propid_drive::drive::{
+    Drive, DriveConfig, DriveEvent, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
+};
 use propid_drive::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
 use propid_drive::virtual_link::{LinkModel, VirtualLink};
 use propid_drive::{sample_of, Machine, StopReason};
@@ -456,6 +458,19 @@ fn a_clock_jump_stops_the_run_with_standby_first() {
             link.step(&mut drive, &mut sim);
         }
         while drive.poll_event().is_some() {}
+        // The live view's snapshot: the last samples, the estimate, the commands, the counters.
+        let snap = drive.snapshot();
+        assert_eq!(snap.phase, Phase::Pattern);
+        assert_eq!(snap.readiness, Readiness::ENGAGED);
+        assert_eq!(snap.recent.len(), SNAPSHOT_SAMPLES);
+        assert_eq!(snap.rows, drive.rows());
+        assert!(snap.rows >= SNAPSHOT_SAMPLES as u64, "{}", snap.rows);
+        assert!((snap.recent.last().unwrap().t - 2.998).abs() < 1e-9);
+        let est = snap
+            .estimate
+            .expect("two seconds of the sine identify the load");
+        assert!(est.j_stderr > 0.0 && est.j_stderr < 0.1 * est.j, "{est:?}");
+        assert_eq!(snap.tx.dropped, 0);
         let jumped = Instant::from_micros((3_000_000.0 + step * 1e6) as u64);
         let first = drive.poll_transmit(jumped).expect("a frame after the jump");
         assert_eq!(drive.phase(), Phase::Stopping);
