@@ -35,7 +35,7 @@ use crate::{ends_transfer, sample_of, subject_of, HostNode, Machine, StopReason}
 /// How many times the stop command (STANDBY + zero setpoint) is queued.
 pub const STOP_REPEATS: u32 = 5;
 /// The stop sequence ends at the latest this long after it began, sent or not.
-pub const STOP_WINDOW: Duration = Duration::from_millis(500);
+pub const STOP_WINDOW: Duration = Duration::from_secs(2);
 /// How many recent samples [`Drive::snapshot`] keeps.
 pub const SNAPSHOT_SAMPLES: usize = 1000;
 /// How soon a frame the link refused is offered again.

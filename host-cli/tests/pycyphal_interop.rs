@@ -2,10 +2,10 @@
 //! socat pseudo-terminal pair, `propid drive` on the other. PyCyphal publishes DoF3rdTs and
 //! Heartbeat and propid records the same values; propid publishes Readiness and Vector31 and
 //! PyCyphal decodes the same values (ENGAGED and the setpoints, then STANDBY and zero).
-//! A second run uses the seed's own 5 ms setpoint period, which python-can's slcan reader cannot
-//! drain (it reads more slowly than propid writes): the link is congested, propid drops frames and
-//! says so, and still the run completes and PyCyphal's last readiness is STANDBY, its last setpoint
-//! zero.
+//! A second run uses the seed's own 5 ms setpoint period, which python-can's slcan reader may not
+//! drain (it reads more slowly than propid writes, above all while it starts): the run completes,
+//! the summary reports what was dropped, and PyCyphal's last readiness is STANDBY, its last
+//! setpoint zero. (The deterministic congestion test is `drive/tests/virtual_run.rs`.)
 //! Needs python3 with `pycyphal[transport-can-pythoncan]` and socat: `#[ignore]`d, run explicitly
 //! by ci/steps/30-pycyphal.sh (`cargo test -p propid --test pycyphal_interop -- --ignored`).
 
@@ -67,6 +67,33 @@ fn run_against_pycyphal(setpoint_period: &str) -> Interop {
         std::thread::sleep(Duration::from_millis(20));
     }
     let tsv = dir.path().join("run.tsv");
+    // PyCyphal first: propid starts once it is listening (its imports take seconds on a busy
+    // machine, longer than the init phase).
+    let mut py = Command::new("python3")
+        .arg(repo().join("tests/pycyphal/interop.py"))
+        .arg(&compiled)
+        .arg(format!("slcan:{}@115200", a.display()))
+        .arg("9")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut py_err = std::io::BufReader::new(py.stderr.take().unwrap());
+    let mut line = String::new();
+    while {
+        line.clear();
+        std::io::BufRead::read_line(&mut py_err, &mut line).unwrap() > 0
+    } {
+        if line.trim() == "ready" {
+            break;
+        }
+    }
+    assert_eq!(line.trim(), "ready", "PyCyphal did not start");
+    let py_err = std::thread::spawn(move || {
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut py_err, &mut rest).unwrap();
+        rest
+    });
     let mut drive = Command::new(env!("CARGO_BIN_EXE_propid"))
         .args([
             "drive",
@@ -89,13 +116,14 @@ fn run_against_pycyphal(setpoint_period: &str) -> Interop {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let py = Command::new("python3")
-        .arg(repo().join("tests/pycyphal/interop.py"))
-        .arg(&compiled)
-        .arg(format!("slcan:{}@115200", a.display()))
-        .arg("9")
-        .output()
-        .unwrap();
+    // Its report can exceed a pipe's buffer: read it all before waiting.
+    let py_stdout = {
+        let mut out = Vec::new();
+        std::io::Read::read_to_end(&mut py.stdout.take().unwrap(), &mut out).unwrap();
+        out
+    };
+    let py_status = py.wait().unwrap();
+    let py_stderr = py_err.join().unwrap();
     let drive_out = {
         use std::io::Read;
         let mut err = String::new();
@@ -109,14 +137,10 @@ fn run_against_pycyphal(setpoint_period: &str) -> Interop {
     };
     let _ = socat.kill();
     let _ = socat.wait();
-    assert!(
-        py.status.success(),
-        "{}",
-        String::from_utf8_lossy(&py.stderr)
-    );
+    assert!(py_status.success(), "{py_stderr}");
     let (drive_status, stderr) = drive_out;
     assert!(drive_status.success(), "propid drive failed: {stderr}");
-    let report: serde_json::Value = serde_json::from_slice(&py.stdout).unwrap();
+    let report: serde_json::Value = serde_json::from_slice(&py_stdout).unwrap();
     let text = std::fs::read_to_string(&tsv).unwrap();
     let rows: Vec<Vec<f64>> = text
         .lines()
@@ -201,7 +225,7 @@ fn propid_and_pycyphal_understand_each_other_over_slcan() {
 
 #[test]
 #[ignore = "needs python3 with pycyphal and socat"]
-fn the_seeds_5_ms_period_congests_the_link_and_standby_still_arrives() {
+fn at_the_seeds_5_ms_period_the_run_completes_with_standby_last_and_drops_reported() {
     let Interop {
         report,
         rows,
@@ -219,13 +243,18 @@ fn the_seeds_5_ms_period_congests_the_link_and_standby_still_arrives() {
         summary.contains("STANDBY and a zero setpoint sent"),
         "{summary}"
     );
-    let busy: u64 = summary
-        .split("link busy ")
-        .nth(1)
-        .and_then(|s| s.split(' ').next())
-        .and_then(|n| n.parse().ok())
-        .unwrap_or_else(|| panic!("{summary}"));
-    assert!(busy > 0, "the link was congested: {summary}");
+    // The counts are there as numbers (whether python-can fell behind depends on the machine:
+    // it did when it was still starting up, and not once it was listening).
+    let count = |key: &str| -> u64 {
+        summary
+            .split(key)
+            .nth(1)
+            .and_then(|s| s.split(' ').next())
+            .and_then(|n| n.parse().ok())
+            .unwrap_or_else(|| panic!("no `{key}` count in {summary}"))
+    };
+    let (dropped, busy) = (count("frames dropped "), count("link busy "));
+    eprintln!("PyCyphal at 5 ms: {dropped} frames dropped, the link busy {busy} times");
     eprintln!("{summary}");
 }
 
