@@ -4,7 +4,7 @@
 
 use core::time::Duration;
 
-use propid_core::can::{Frame, Mtu, Priority, TxError};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId, TxError};
 use propid_core::dsdl::{DataType, Heartbeat, Readiness, Vector31};
 use propid_core::node::{Event, Health, Mode, Node, NodeConfig};
 use propid_core::time::Instant;
@@ -12,8 +12,9 @@ use propid_core::time::Instant;
 /// 16 ports: transfer-ID counters for the 12 bulk subjects of the load test.
 type TestNode = Node<16, 8, 512, 32>;
 
-const SETPOINT: u16 = 24;
-const READINESS: u16 = 23;
+const SETPOINT: SubjectId = SubjectId::from_const(24);
+const READINESS: SubjectId = SubjectId::from_const(23);
+const HEARTBEAT: SubjectId = SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID);
 
 fn ms(t: u64) -> Instant {
     Instant::from_millis(t)
@@ -21,12 +22,15 @@ fn ms(t: u64) -> Instant {
 
 fn pair() -> (TestNode, TestNode) {
     let driver = TestNode::new(
-        NodeConfig::new(10, "org.propid.driver", Mtu::Classic),
+        NodeConfig::new(NodeId::from_const(10), "org.propid.driver", Mtu::Classic),
         ms(0),
     );
-    let mut drive = TestNode::new(NodeConfig::new(42, "org.propid.drive", Mtu::Classic), ms(0));
+    let mut drive = TestNode::new(
+        NodeConfig::new(NodeId::from_const(42), "org.propid.drive", Mtu::Classic),
+        ms(0),
+    );
     drive
-        .subscribe_message(Heartbeat::FIXED_SUBJECT_ID, Heartbeat::EXTENT_BYTES)
+        .subscribe_message(HEARTBEAT, Heartbeat::EXTENT_BYTES)
         .unwrap();
     drive
         .subscribe_message(SETPOINT, Vector31::EXTENT_BYTES)
@@ -63,9 +67,7 @@ fn carry(from: &mut TestNode, to: &mut TestNode, now: Instant, budget: usize) ->
         }) = to.handle_frame(now, f)
         {
             seen.push(match subject_id {
-                Heartbeat::FIXED_SUBJECT_ID => {
-                    Seen::Heartbeat(Heartbeat::deserialize(payload).unwrap())
-                }
+                HEARTBEAT => Seen::Heartbeat(Heartbeat::deserialize(payload).unwrap()),
                 SETPOINT => {
                     let v = Vector31::deserialize(payload).unwrap();
                     // Every element the same: no frame of another transfer mixed in.
@@ -170,7 +172,7 @@ fn heartbeats_still_go_out_under_load_and_report_the_status() {
         }
         let bulk = driver.publish(
             ms(t),
-            300 + (t % 12) as u16,
+            SubjectId::try_from(300 + t % 12).unwrap(),
             Priority::LOW,
             &[0x55; 22],
             Duration::from_millis(500),
@@ -239,7 +241,7 @@ fn a_full_queue_is_a_counted_refusal() {
         driver
             .publish_message(
                 ms(0),
-                100 + subject,
+                SubjectId::try_from(100 + subject).unwrap(),
                 Priority::HIGH,
                 &Vector31::splat(1.0),
                 Duration::from_secs(1),
@@ -249,7 +251,7 @@ fn a_full_queue_is_a_counted_refusal() {
     assert_eq!(
         driver.publish_message(
             ms(0),
-            103,
+            SubjectId::from_const(103),
             Priority::HIGH,
             &Vector31::splat(1.0),
             Duration::from_secs(1)

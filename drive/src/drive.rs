@@ -20,7 +20,7 @@ use std::io::Write;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use propid_core::can::{Frame, Mtu, Priority};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig, TxStats};
@@ -81,26 +81,6 @@ pub(crate) fn check_range(
     ))
 }
 
-pub(crate) fn check_node_id(setting: &'static str, id: u8) -> Result<(), ConfigError> {
-    if id > 127 {
-        return Err(ConfigError::new(
-            setting,
-            format!("a node-ID must be 0..=127 (got {id})"),
-        ));
-    }
-    Ok(())
-}
-
-pub(crate) fn check_subject(setting: &'static str, id: u16) -> Result<(), ConfigError> {
-    if id > 8191 {
-        return Err(ConfigError::new(
-            setting,
-            format!("a subject-ID must be 0..=8191 (got {id})"),
-        ));
-    }
-    Ok(())
-}
-
 pub(crate) fn check_mtu(mtu: usize) -> Result<Mtu, ConfigError> {
     match mtu {
         8 => Ok(Mtu::Classic),
@@ -119,18 +99,18 @@ pub(crate) const DAY: f64 = 86_400.0;
 #[derive(Clone, Debug)]
 pub struct DriveConfig {
     /// Node-ID.
-    pub node_id: u8,
+    pub node_id: NodeId,
     /// MTU (8 or 64).
     pub mtu: usize,
     /// Readiness subject, if any.
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
-    pub setpoint_id: u16,
+    pub setpoint_id: SubjectId,
     /// Feedback subject.
-    pub feedback_id: u16,
+    pub feedback_id: SubjectId,
     /// The drive's node-ID, whose heartbeat is watched for a reboot; `None`: the publisher of
     /// the first feedback message.
-    pub drive_node_id: Option<u8>,
+    pub drive_node_id: Option<NodeId>,
     /// The excitation.
     pub excitation: Excitation,
     /// Setpoint period [s].
@@ -146,11 +126,11 @@ impl DriveConfig {
     /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no running fit.
     pub fn example(excitation: Excitation) -> Self {
         DriveConfig {
-            node_id: 10,
+            node_id: NodeId::from_const(10),
             mtu: 8,
-            readiness_id: Some(10),
-            setpoint_id: 24,
-            feedback_id: 110,
+            readiness_id: Some(SubjectId::from_const(10)),
+            setpoint_id: SubjectId::from_const(24),
+            feedback_id: SubjectId::from_const(110),
             drive_node_id: None,
             excitation,
             setpoint_period: 0.005,
@@ -159,17 +139,9 @@ impl DriveConfig {
         }
     }
 
-    /// Checks every value before anything is sent: finite numbers in range, IDs in range.
+    /// Checks every value before anything is sent: finite numbers in range (the IDs are in
+    /// range by type).
     pub fn validate(&self) -> Result<(), ConfigError> {
-        check_node_id("node_id", self.node_id)?;
-        if let Some(id) = self.drive_node_id {
-            check_node_id("drive_node_id", id)?;
-        }
-        check_subject("setpoint_id", self.setpoint_id)?;
-        check_subject("feedback_id", self.feedback_id)?;
-        if let Some(id) = self.readiness_id {
-            check_subject("readiness_id", id)?;
-        }
         check_mtu(self.mtu)?;
         let ex = &self.excitation;
         check_range("setpoint_period", self.setpoint_period, 0.0, true, 0.5, "s")?;
@@ -320,7 +292,7 @@ pub struct Drive {
     next_publish: Instant,
     last_feedback: Instant,
     last_now: Instant,
-    drive_id: Option<u8>,
+    drive_id: Option<NodeId>,
     drive_uptime: Option<u32>,
     held: Option<Frame>,
     held_deadline: Instant,
@@ -349,7 +321,10 @@ impl Drive {
         let mut node = HostNode::new(node_config, now);
         // Two subscriptions on a fresh node with 8 ports and validated IDs cannot fail.
         let _ = node.subscribe_message(cfg.feedback_id, DoF3rdTs::EXTENT_BYTES);
-        let _ = node.subscribe_message(Heartbeat::FIXED_SUBJECT_ID, Heartbeat::EXTENT_BYTES);
+        let _ = node.subscribe_message(
+            SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID),
+            Heartbeat::EXTENT_BYTES,
+        );
         let init_end = now + Duration::from_secs_f64(cfg.excitation.init_duration);
         Drive {
             drive_id: cfg.drive_node_id,
@@ -627,7 +602,7 @@ impl Drive {
                 if let Ok(fb) = DoF3rdTs::deserialize(payload) {
                     feedback = Some((timestamp, source, fb));
                 }
-            } else if subject_id == Heartbeat::FIXED_SUBJECT_ID {
+            } else if subject_id.get() == Heartbeat::FIXED_SUBJECT_ID {
                 if let (Some(src), Ok(hb)) = (source, Heartbeat::deserialize(payload)) {
                     heartbeat = Some((src, hb.uptime));
                 }
@@ -639,7 +614,7 @@ impl Drive {
                     self.stop(
                         now,
                         StopReason::DriveRebooted {
-                            node_id: src,
+                            node_id: src.get(),
                             before,
                             after: uptime,
                         },
@@ -706,9 +681,9 @@ impl Drive {
             }
         };
         if ends_transfer(frame) {
-            if subject == Some(self.cfg.setpoint_id) {
+            if subject == Some(self.cfg.setpoint_id.get()) {
                 add(&mut self.zero_setpoints_sent);
-            } else if subject.is_some() && subject == self.cfg.readiness_id {
+            } else if subject.is_some() && subject == self.cfg.readiness_id.map(SubjectId::get) {
                 add(&mut self.standby_sent);
             }
         }

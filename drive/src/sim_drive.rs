@@ -13,7 +13,7 @@ use std::collections::VecDeque;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use propid_core::can::{Frame, Mtu, Priority};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
@@ -21,7 +21,7 @@ use propid_science::stand::{Stand, StandConfig};
 
 use propid_transport::CanTransport;
 
-use crate::drive::{check_mtu, check_node_id, check_range, check_subject, ConfigError, DAY};
+use crate::drive::{check_mtu, check_range, ConfigError, DAY};
 use crate::realtime::{run_realtime, Clock};
 use crate::{HostNode, Machine, StopReason};
 
@@ -32,15 +32,15 @@ pub const SIM_DEADMAN: Duration = Duration::from_millis(500);
 #[derive(Clone, Debug)]
 pub struct SimDriveConfig {
     /// Node-ID.
-    pub node_id: u8,
+    pub node_id: NodeId,
     /// 8 or 64.
     pub mtu: usize,
     /// Readiness subject (no readiness gating when unset).
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
-    pub setpoint_id: u16,
+    pub setpoint_id: SubjectId,
     /// Feedback subject.
-    pub feedback_id: u16,
+    pub feedback_id: SubjectId,
     /// Feedback interval [s].
     pub interval: f64,
     /// Run time limit [s] (0: none).
@@ -56,11 +56,11 @@ impl SimDriveConfig {
     /// feedback on 110 every 2 ms, Classic CAN, running until stopped.
     pub fn example(stand: StandConfig, seed: u64) -> Self {
         SimDriveConfig {
-            node_id: 42,
+            node_id: NodeId::from_const(42),
             mtu: 8,
-            readiness_id: Some(10),
-            setpoint_id: 24,
-            feedback_id: 110,
+            readiness_id: Some(SubjectId::from_const(10)),
+            setpoint_id: SubjectId::from_const(24),
+            feedback_id: SubjectId::from_const(110),
             interval: 0.002,
             duration: 0.0,
             stand,
@@ -70,12 +70,6 @@ impl SimDriveConfig {
 
     /// Checks every value before anything is sent.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        check_node_id("node_id", self.node_id)?;
-        check_subject("setpoint_id", self.setpoint_id)?;
-        check_subject("feedback_id", self.feedback_id)?;
-        if let Some(id) = self.readiness_id {
-            check_subject("readiness_id", id)?;
-        }
         check_mtu(self.mtu)?;
         check_range("interval", self.interval, 0.0, true, 1.0, "s")?;
         check_range("duration", self.duration, 0.0, false, DAY, "s")?;

@@ -69,7 +69,9 @@ impl Observed {
             (24, Vector31::EXTENT_BYTES),
         ] {
             rx.subscribe(propid_core::can::Subscription {
-                port: propid_core::can::Port::Subject(subject),
+                port: propid_core::can::Port::Subject(propid_core::can::SubjectId::from_const(
+                    subject,
+                )),
                 extent,
                 transfer_id_timeout: propid_core::can::DEFAULT_TRANSFER_ID_TIMEOUT,
             })
@@ -88,7 +90,7 @@ impl Machine for Observed {
     fn handle_frame(&mut self, now: Instant, frame: &Frame) {
         if let Ok(Some(t)) = self.rx.accept(frame) {
             if let propid_core::can::TransferKind::Message { subject_id } = t.header.kind {
-                let input = if subject_id == 10 {
+                let input = if subject_id.get() == 10 {
                     SimInput::Readiness(Readiness::deserialize(t.payload).unwrap().value)
                 } else {
                     SimInput::Setpoint(Vector31::deserialize(t.payload).unwrap().value[0])

@@ -28,17 +28,22 @@ pub use status::{Health, Mode};
 pub use tx_queue::{TxQueue, TxStats};
 
 use crate::can::{
-    Frame, Mtu, Port, Priority, Reassembler, RxStats, Subscription, TransferHeader, TransferKind,
-    TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
+    Frame, Mtu, NodeId, Port, Priority, Reassembler, RxStats, ServiceId, SubjectId, Subscription,
+    TransferHeader, TransferKind, TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
 };
-use crate::dsdl::{DataType, GetInfoResponse, Heartbeat, Version, GET_INFO_SERVICE_ID};
+use crate::dsdl::{DataType, GetInfoResponse, Heartbeat, Version};
+
+/// `uavcan.node.Heartbeat.1.0`'s fixed subject.
+const HEARTBEAT_SUBJECT: SubjectId = SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID);
+/// `uavcan.node.GetInfo.1.0`'s fixed service.
+const GET_INFO_SERVICE: ServiceId = ServiceId::from_const(crate::dsdl::GET_INFO_SERVICE_ID);
 use crate::time::Instant;
 
 /// Who the node is.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeConfig {
-    /// Node-ID, 0..=127.
-    pub node_id: u8,
+    /// Node-ID.
+    pub node_id: NodeId,
     /// Name reported by GetInfo (reverse-domain style), at most 50 bytes.
     pub name: heapless::Vec<u8, 50>,
     /// Software version reported by GetInfo.
@@ -51,13 +56,13 @@ pub struct NodeConfig {
 
 impl NodeConfig {
     /// A configuration with the given ID and name (truncated to 50 bytes), version 0.1.
-    pub fn new(node_id: u8, name: &str, mtu: Mtu) -> Self {
+    pub fn new(node_id: NodeId, name: &str, mtu: Mtu) -> Self {
         let bytes = name.as_bytes();
         NodeConfig {
             node_id,
             name: heapless::Vec::from_slice(&bytes[..bytes.len().min(50)]).unwrap_or_default(),
             software_version: Version { major: 0, minor: 1 },
-            unique_id: [node_id; 16],
+            unique_id: [node_id.get(); 16],
             mtu,
         }
     }
@@ -69,9 +74,9 @@ pub enum Event<'a> {
     /// A message on a subscribed subject.
     Message {
         /// Subject-ID.
-        subject_id: u16,
+        subject_id: SubjectId,
         /// Publisher (`None`: anonymous).
-        source: Option<u8>,
+        source: Option<NodeId>,
         /// Transfer-ID.
         transfer_id: u8,
         /// Priority.
@@ -84,9 +89,9 @@ pub enum Event<'a> {
     /// A response to a request this node made.
     Response {
         /// Service-ID.
-        service_id: u16,
+        service_id: ServiceId,
         /// Server node-ID.
-        source: u8,
+        source: NodeId,
         /// Transfer-ID (that of the request).
         transfer_id: u8,
         /// Time of its first frame.
@@ -102,8 +107,6 @@ pub enum Event<'a> {
 pub enum NodeError {
     /// All subscription slots are taken.
     TooManyPorts,
-    /// A port-ID out of range.
-    InvalidPort,
 }
 
 /// Counters.
@@ -148,7 +151,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         let mut rx = Reassembler::new(Some(config.node_id));
         // GetInfo requests are empty; a slot for them always exists when PORTS ≥ 1.
         let _ = rx.subscribe(Subscription {
-            port: Port::Request(GET_INFO_SERVICE_ID),
+            port: Port::Request(GET_INFO_SERVICE),
             extent: 0,
             transfer_id_timeout: DEFAULT_TRANSFER_ID_TIMEOUT,
         });
@@ -206,7 +209,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     }
 
     /// Frames of messages on `subject_id` waiting to be sent.
-    pub fn pending_frames(&self, subject_id: u16) -> usize {
+    pub fn pending_frames(&self, subject_id: SubjectId) -> usize {
         self.queue.pending_frames(subject_id)
     }
 
@@ -218,10 +221,11 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     }
 
     /// Receives messages on `subject_id`, keeping up to `extent` payload bytes.
-    pub fn subscribe_message(&mut self, subject_id: u16, extent: usize) -> Result<(), NodeError> {
-        if subject_id > 8191 {
-            return Err(NodeError::InvalidPort);
-        }
+    pub fn subscribe_message(
+        &mut self,
+        subject_id: SubjectId,
+        extent: usize,
+    ) -> Result<(), NodeError> {
         self.rx
             .subscribe(Subscription {
                 port: Port::Subject(subject_id),
@@ -261,15 +265,12 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn publish(
         &mut self,
         now: Instant,
-        subject_id: u16,
+        subject_id: SubjectId,
         priority: Priority,
         payload: &[u8],
         timeout: Duration,
     ) -> Result<(), TxError> {
-        if subject_id > 8191 {
-            return Err(TxError::InvalidHeader);
-        }
-        let transfer_id = self.next_transfer_id(false, subject_id)?;
+        let transfer_id = self.next_transfer_id(false, subject_id.get())?;
         let header = TransferHeader {
             priority,
             kind: TransferKind::Message { subject_id },
@@ -283,7 +284,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn publish_message<T: DataType>(
         &mut self,
         now: Instant,
-        subject_id: u16,
+        subject_id: SubjectId,
         priority: Priority,
         message: &T,
         timeout: Duration,
@@ -298,15 +299,12 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn request(
         &mut self,
         now: Instant,
-        service_id: u16,
-        server: u8,
+        service_id: ServiceId,
+        server: NodeId,
         payload: &[u8],
         response_extent: usize,
         timeout: Duration,
     ) -> Result<u8, TxError> {
-        if service_id > 511 || server > 127 {
-            return Err(TxError::InvalidHeader);
-        }
         self.rx
             .subscribe(Subscription {
                 port: Port::Response(service_id),
@@ -314,7 +312,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
                 transfer_id_timeout: DEFAULT_TRANSFER_ID_TIMEOUT,
             })
             .map_err(|_| TxError::TooManyPorts)?;
-        let transfer_id = self.next_transfer_id(true, service_id)?;
+        let transfer_id = self.next_transfer_id(true, service_id.get())?;
         let header = TransferHeader {
             priority: Priority::NOMINAL,
             kind: TransferKind::Request {
@@ -332,7 +330,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn handle_frame<'s>(&'s mut self, now: Instant, frame: &'s Frame) -> Option<Event<'s>> {
         self.now = self.now.max(now);
         let get_info = crate::can::CanId::parse(frame.id()).is_some_and(|id| {
-            matches!(id.kind, TransferKind::Request { service_id, .. } if service_id == GET_INFO_SERVICE_ID)
+            matches!(id.kind, TransferKind::Request { service_id, .. } if service_id == GET_INFO_SERVICE)
         });
         if get_info {
             let header = self.rx.accept(frame).ok()??.header;
@@ -363,7 +361,13 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         }
     }
 
-    fn answer_get_info(&mut self, now: Instant, client: u8, transfer_id: u8, priority: Priority) {
+    fn answer_get_info(
+        &mut self,
+        now: Instant,
+        client: NodeId,
+        transfer_id: u8,
+        priority: Priority,
+    ) {
         let info = GetInfoResponse {
             protocol_version: Version { major: 1, minor: 0 },
             hardware_version: Version { major: 0, minor: 0 },
@@ -379,7 +383,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         let header = TransferHeader {
             priority,
             kind: TransferKind::Response {
-                service_id: GET_INFO_SERVICE_ID,
+                service_id: GET_INFO_SERVICE,
                 destination: client,
             },
             source: Some(self.config.node_id),
@@ -411,7 +415,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
             let header = TransferHeader {
                 priority: Priority::NOMINAL,
                 kind: TransferKind::Message {
-                    subject_id: Heartbeat::FIXED_SUBJECT_ID,
+                    subject_id: HEARTBEAT_SUBJECT,
                 },
                 source: Some(self.config.node_id),
                 transfer_id: self.heartbeat_tid,

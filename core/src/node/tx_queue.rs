@@ -29,7 +29,9 @@
 //! to send is the last element, so popping is O(1) and pushing is one partition search and one
 //! rotation, O(N). Nothing allocates.
 
-use crate::can::{Frame, FrameSplitter, Mtu, Priority, TransferHeader, TransferKind, TxError};
+use crate::can::{
+    Frame, FrameSplitter, Mtu, Priority, SubjectId, TransferHeader, TransferKind, TxError,
+};
 use crate::time::Instant;
 
 /// Transmit-side counters. Frames and transfers are counted separately, as each field says.
@@ -57,7 +59,7 @@ struct Entry {
     deadline: Instant,
     priority: Priority,
     /// The subject of a message transfer (`None` for service transfers).
-    subject: Option<u16>,
+    subject: Option<SubjectId>,
     /// Position of this frame in its transfer, 0-based.
     index: u16,
     /// Frames in its transfer.
@@ -119,7 +121,7 @@ impl<const N: usize> TxQueue<N> {
     }
 
     /// Frames of messages on `subject_id` waiting (including the rest of one in progress).
-    pub fn pending_frames(&self, subject_id: u16) -> usize {
+    pub fn pending_frames(&self, subject_id: SubjectId) -> usize {
         self.entries
             .iter()
             .filter(|e| e.subject == Some(subject_id))
@@ -286,8 +288,10 @@ mod tests {
     fn message(subject_id: u16, priority: Priority, tid: u8) -> TransferHeader {
         TransferHeader {
             priority,
-            kind: TransferKind::Message { subject_id },
-            source: Some(10),
+            kind: TransferKind::Message {
+                subject_id: SubjectId::from_const(subject_id),
+            },
+            source: Some(crate::can::NodeId::from_const(10)),
             transfer_id: tid,
         }
     }
@@ -483,7 +487,7 @@ mod tests {
         )
         .unwrap();
         assert_eq!(q.stats().superseded, 1);
-        assert_eq!(q.pending_frames(24), 4);
+        assert_eq!(q.pending_frames(SubjectId::from_const(24)), 4);
         // The superseded transfer is gone; the other subject keeps its place ahead of the new one.
         assert_eq!(
             &drain(&mut q, at(2))[..],
