@@ -1,6 +1,6 @@
 //! Setpoint publication jitter: `propid drive`'s loop against the seed's asyncio loop, both
-//! publishing every 5 ms for the same time in one run. propid's side is the real drive loop on an
-//! in-memory bus whose `send` records when each setpoint frame leaves; the seed's side is its
+//! publishing every 5 ms for the same time in one run. propid's side is the Sans-IO `Drive`
+//! machine in the real-time loop (`run_drive`, as `propid drive` runs it) on an in-memory bus whose `send` records when each setpoint frame leaves; the seed's side is its
 //! `publish_until` with a publisher that records when it is called
 //! (`benches/setpoint_jitter/seed_loop.py`). Reported: percentiles of |interval − 5 ms|.
 //! `cargo bench -p propid-benches --bench setpoint_jitter [-- SECONDS]`; with `--test` (CI smoke)
@@ -9,7 +9,8 @@
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use propid_drive::drive::{drive, DriveConfig};
+use propid_drive::drive::{run_drive, DriveConfig};
+use propid_drive::realtime::SystemClock;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_transport::{CanTransport, Frame, MemoryBus, TransportError};
 
@@ -83,11 +84,12 @@ fn main() {
         pattern: Pattern::Sine,
     });
     let t0 = Instant::now();
-    let _ = drive(
-        &cfg,
+    let _ = run_drive(
+        cfg,
         &mut rec,
-        &mut std::io::sink(),
+        &SystemClock,
         &AtomicBool::new(false),
+        &mut std::io::sink(),
         &mut |_| {},
     );
     let ours: Vec<f64> = rec

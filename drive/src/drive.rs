@@ -1,37 +1,101 @@
-//! The seed's driver as a Cyphal node.
+//! The seed's driver as a Sans-IO Cyphal node.
 //!
 //! ```text
-//!  DriveConfig (PyCyphal register env vars or flags) ─► validate before anything is sent
-//!  loop (HostClock):
-//!    every setpoint period: Readiness ENGAGED + Vector31 setpoint ─► Node::publish ─► transport
-//!    transport.receive ─► Node::handle_frame ─► DoF3rdTs ─► TSV row (flushed) [+ running fit]
-//!    Node::poll_transmit ─► transport.send   (heartbeat 1 Hz, GetInfo answers)
-//!  phases: init at hi (feedback ignored) → header → pattern (sine | steps | chirp) → stop
-//!  stop (end, error, SIGINT/SIGTERM, feedback silent > deadman): STANDBY + zero setpoint, several
-//!  times, then exit, saying why on stderr
+//!  DriveConfig::validate (every number, every ID) before anything is sent
+//!  Drive::new(cfg, now)
+//!  phases: Init (at hi, feedback ignored) → Pattern (rows recorded) → Stopping → Stopped
+//!  every setpoint period: Readiness ENGAGED + Vector31 setpoint ─► Node (deadline 2 periods;
+//!                         a newer setpoint supersedes a queued one)
+//!  handle_frame: DoF3rdTs ─► DriveEvent::Row   Heartbeat of the drive ─► reboot check
+//!  stop (end, signal, deadman, reboot, clock jump, bus-off, BELL, vanished device, output error):
+//!    purge the queue, STANDBY + zero first, re-sent STOP_REPEATS times within STOP_WINDOW
 //! ```
+//!
+//! The link may refuse a frame (congestion): the caller gives it back with
+//! [`Drive::handle_blocked`]; it is offered again until its deadline, then dropped and counted.
+//! Frames, not the loop, wait: the drive keeps running through congestion and reports the drops.
 
+use std::collections::VecDeque;
 use std::io::Write;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use propid_core::can::{Mtu, NodeId, Priority, SubjectId};
-use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
+use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
-use propid_core::node::{Event, NodeConfig};
+use propid_core::node::{Event, NodeConfig, TxStats};
 use propid_core::time::Instant;
-use propid_transport::{CanTransport, HostClock};
-
 use propid_io::tsv::{Row, Sample, TsvWriter};
-use propid_io::InputError;
 use propid_science::excitation::Excitation;
+use propid_transport::CanTransport;
 
-use crate::HostNode;
+use crate::realtime::{run_realtime, Clock, RunOutcome};
+use crate::{ends_transfer, sample_of, subject_of, HostNode, Machine, StopReason};
 
-/// How many times the stop command (STANDBY + zero setpoint) is sent.
-pub const STOP_REPEATS: usize = 5;
+/// How many times the stop command (STANDBY + zero setpoint) is queued.
+pub const STOP_REPEATS: u32 = 5;
+/// The stop sequence ends at the latest this long after it began, sent or not.
+pub const STOP_WINDOW: Duration = Duration::from_secs(2);
+/// How many recent samples [`Drive::snapshot`] keeps.
+pub const SNAPSHOT_SAMPLES: usize = 1000;
+/// How soon a frame the link refused is offered again.
+const RETRY_STEP: Duration = Duration::from_millis(1);
 
-/// A validated configuration.
+/// A setting that is out of range, named as the seed's register (`init_duration`, `node_id`).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{setting}: {problem}")]
+pub struct ConfigError {
+    /// The setting's name, as the seed's register or field (`init_duration`).
+    pub setting: &'static str,
+    /// What is wrong with it, and the value given.
+    pub problem: String,
+}
+
+impl ConfigError {
+    pub(crate) fn new(setting: &'static str, problem: impl Into<String>) -> Self {
+        ConfigError {
+            setting,
+            problem: problem.into(),
+        }
+    }
+}
+
+/// Checks that `v` is finite and within `lo..=hi` (`lo_open`: strictly above `lo`).
+pub(crate) fn check_range(
+    setting: &'static str,
+    v: f64,
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+    unit: &str,
+) -> Result<(), ConfigError> {
+    let ok = v.is_finite() && (if lo_open { v > lo } else { v >= lo }) && v <= hi;
+    if ok {
+        return Ok(());
+    }
+    let bound = if lo_open { "above" } else { "at least" };
+    Err(ConfigError::new(
+        setting,
+        format!("must be a finite number {bound} {lo} and at most {hi} {unit} (got {v})")
+            .replace("  ", " "),
+    ))
+}
+
+pub(crate) fn check_mtu(mtu: usize) -> Result<Mtu, ConfigError> {
+    match mtu {
+        8 => Ok(Mtu::Classic),
+        64 => Ok(Mtu::Fd),
+        _ => Err(ConfigError::new(
+            "mtu",
+            format!("must be 8 or 64 (got {mtu})"),
+        )),
+    }
+}
+
+/// A day: the longest duration any setting may have.
+pub(crate) const DAY: f64 = 86_400.0;
+
+/// The driver's settings.
 #[derive(Clone, Debug)]
 pub struct DriveConfig {
     /// Node-ID.
@@ -44,19 +108,22 @@ pub struct DriveConfig {
     pub setpoint_id: SubjectId,
     /// Feedback subject.
     pub feedback_id: SubjectId,
+    /// The drive's node-ID, whose heartbeat is watched for a reboot; `None`: the publisher of
+    /// the first feedback message.
+    pub drive_node_id: Option<NodeId>,
     /// The excitation.
     pub excitation: Excitation,
     /// Setpoint period [s].
     pub setpoint_period: f64,
     /// Deadman timeout [s].
     pub deadman: f64,
-    /// Keep a running estimate of J, c1, c2 (reported in [`DriveEvent::Progress`]).
+    /// Keep a running estimate of J, c1, c2 (reported in [`Progress`]).
     pub fit: bool,
 }
 
 impl DriveConfig {
     /// The seed document's example set-up: node 10, readiness on subject 10, setpoint on 24,
-    /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no progress lines.
+    /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no running fit.
     pub fn example(excitation: Excitation) -> Self {
         DriveConfig {
             node_id: NodeId::from_const(10),
@@ -64,98 +131,327 @@ impl DriveConfig {
             readiness_id: Some(SubjectId::from_const(10)),
             setpoint_id: SubjectId::from_const(24),
             feedback_id: SubjectId::from_const(110),
+            drive_node_id: None,
             excitation,
             setpoint_period: 0.005,
             deadman: 0.5,
             fit: false,
         }
     }
-}
 
-impl DriveConfig {
-    /// Checks every value before anything is sent (the IDs are in range by type).
-    pub fn validate(&self) -> Result<(), InputError> {
-        self.excitation.validate()?;
-        if !(self.setpoint_period > 0.0 && self.setpoint_period < 1.0) {
-            return Err(InputError(format!(
-                "setpoint_period must be in (0, 1) s (got {})",
-                self.setpoint_period
-            )));
-        }
-        if !(self.deadman > 0.0 && self.deadman <= 60.0) {
-            return Err(InputError(format!(
-                "the deadman timeout must be in (0, 60] s (got {})",
-                self.deadman
-            )));
-        }
-        if self.mtu != 8 && self.mtu != 64 {
-            return Err(InputError(format!(
-                "MTU must be 8 or 64 (got {})",
-                self.mtu
-            )));
-        }
-        Ok(())
+    /// Checks every value before anything is sent: finite numbers in range (the IDs are in
+    /// range by type).
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        check_mtu(self.mtu)?;
+        let ex = &self.excitation;
+        check_range("setpoint_period", self.setpoint_period, 0.0, true, 0.5, "s")?;
+        check_range("deadman", self.deadman, 0.0, true, 60.0, "s")?;
+        check_range("period", ex.period, 0.0, true, DAY, "s")?;
+        check_range("pattern_duration", ex.duration, 0.0, true, DAY, "s")?;
+        check_range("init_duration", ex.init_duration, 0.0, false, DAY, "s")?;
+        ex.validate()
+            .map_err(|e| ConfigError::new("setpoint_rat_lo_hi", e.0))
     }
 }
 
-/// Why the drive stopped.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum StopReason {
-    /// The pattern ran to its end.
-    Completed,
-    /// SIGINT or SIGTERM.
-    Signal,
-    /// No feedback for longer than the deadman timeout.
-    LostFeedback,
-    /// A transport or output error.
-    Error(String),
+/// Where the run is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Phase {
+    /// At the high setpoint, feedback ignored (the seed's init phase).
+    Init,
+    /// Playing the pattern and recording.
+    Pattern,
+    /// Sending STANDBY and a zero setpoint.
+    Stopping,
+    /// Done.
+    Stopped,
 }
 
-/// What the drive reports while it runs (the caller decides what to show).
+/// The running estimate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Inertia J [kg·m²].
+    pub j: f64,
+    /// Viscous coefficient c1.
+    pub c1: f64,
+    /// Quadratic drag c2.
+    pub c2: f64,
+    /// Standard error of J.
+    pub j_stderr: f64,
+    /// Standard error of c2.
+    pub c2_stderr: f64,
+}
+
+/// Transmit-side counters of a run.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TxCounters {
+    /// Frames the link refused for now (WouldBlock, write timeout); each was offered again.
+    pub would_block: u64,
+    /// Frames dropped: past their deadline in the queue, or refused by the link until then.
+    pub dropped: u64,
+    /// Queued setpoints replaced by a newer one before any of their frames left.
+    pub superseded: u64,
+    /// Transfers the full queue refused.
+    pub refused: u64,
+    /// Frames purged by the stop sequence.
+    pub purged: u64,
+}
+
+/// Once a second during the pattern.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Progress {
+    /// Seconds into the pattern.
+    pub elapsed: f64,
+    /// Feedback rows in the last second.
+    pub feedback_per_s: u64,
+    /// Received transfers the reassembler rejected so far.
+    pub dropped_transfers: u64,
+    /// Transmit counters so far.
+    pub tx: TxCounters,
+    /// The running estimate, when `fit` is on and the data identify it.
+    pub estimate: Option<Estimate>,
+}
+
+/// What the stop sequence did, and the run's totals.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StopReport {
+    /// Why it stopped.
+    pub reason: StopReason,
+    /// Rows recorded.
+    pub rows: u64,
+    /// STANDBY readiness messages handed to the link (0 when no readiness subject is set).
+    pub standby_sent: u32,
+    /// Whole zero-setpoint transfers handed to the link.
+    pub zero_setpoints_sent: u32,
+    /// Transmit counters of the whole run.
+    pub tx: TxCounters,
+    /// The running estimate at the end (computed whether or not `fit` was on).
+    pub estimate: Option<Estimate>,
+}
+
+impl StopReport {
+    /// True when at least one STANDBY (if readiness is published) and one whole zero setpoint
+    /// were handed to the link.
+    pub fn stop_commands_sent(&self, readiness: bool) -> bool {
+        self.zero_setpoints_sent > 0 && (!readiness || self.standby_sent > 0)
+    }
+}
+
+/// What the drive reports while it runs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DriveEvent {
     /// The init phase is over and recording begins.
     PatternStarted,
+    /// One feedback row: write it (and flush it) before the next.
+    Row(Row),
     /// Once a second during the pattern.
-    Progress {
-        /// Seconds into the pattern.
-        elapsed: f64,
-        /// Feedback rows in the last second.
-        feedback_per_s: u64,
-        /// Transfers the reassembler rejected so far.
-        dropped_transfers: u64,
-        /// The running estimate (J, c1, c2), when `fit` is on and the data identify it.
-        estimate: Option<(f64, f64, f64)>,
-    },
+    Progress(Progress),
+    /// The stop sequence began (STANDBY is first in line).
+    Stopping(StopReason),
+    /// The stop sequence ended; the machine does nothing more.
+    Stopped(StopReport),
 }
 
-/// What a drive did.
-#[derive(Clone, Debug)]
-pub struct DriveOutcome {
-    /// Why it stopped.
-    pub reason: StopReason,
-    /// TSV rows written.
+/// A cheap copy of the drive's state for a live view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveSnapshot {
+    /// Where the run is.
+    pub phase: Phase,
+    /// Seconds into the pattern (0 before it).
+    pub elapsed: f64,
+    /// The last setpoint commanded.
+    pub setpoint: f32,
+    /// The last readiness commanded.
+    pub readiness: u8,
+    /// The last [`SNAPSHOT_SAMPLES`] samples, oldest first.
+    pub recent: Vec<Sample>,
+    /// Rows recorded.
     pub rows: u64,
-    /// Running estimate at the end, when enough data arrived.
-    pub estimate: Option<(f64, f64, f64)>,
+    /// The running estimate with standard errors (when the data identify it).
+    pub estimate: Option<Estimate>,
+    /// Transmit counters.
+    pub tx: TxCounters,
+    /// Received transfers rejected.
+    pub dropped_transfers: u64,
 }
 
-struct Driver<'a> {
-    cfg: &'a DriveConfig,
+struct Stopping {
+    reason: StopReason,
+    until: Instant,
+    repeats_left: u32,
+    next: Instant,
+}
+
+/// The driver. See the module documentation.
+pub struct Drive {
+    cfg: DriveConfig,
     node: HostNode,
-    transport: &'a mut dyn CanTransport,
+    phase: Phase,
+    init_end: Instant,
+    pattern_start: Option<Instant>,
+    next_publish: Instant,
+    last_feedback: Instant,
+    last_now: Instant,
+    drive_id: Option<NodeId>,
+    drive_uptime: Option<u32>,
+    held: Option<Frame>,
+    held_deadline: Instant,
+    would_block: u64,
+    held_dropped: u64,
+    rows: u64,
+    estimator: LoadEstimator<f64>,
+    next_progress: Instant,
+    rows_at_progress: u64,
+    recent: VecDeque<Sample>,
+    setpoint: f32,
+    readiness: u8,
+    stopping: Option<Stopping>,
+    standby_sent: u32,
+    zero_setpoints_sent: u32,
+    events: VecDeque<DriveEvent>,
 }
 
-impl Driver<'_> {
-    fn publish(&mut self, now: Instant, readiness: u8, setpoint: f32) {
-        let timeout = Duration::from_secs_f64(self.cfg.setpoint_period * 2.0);
+impl Drive {
+    /// A drive that starts now, in the init phase. `cfg` must have passed
+    /// [`DriveConfig::validate`].
+    pub fn new(cfg: DriveConfig, now: Instant) -> Self {
+        let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
+        let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", mtu);
+        node_config.software_version.minor = 1;
+        let mut node = HostNode::new(node_config, now);
+        // Two subscriptions on a fresh node with 8 ports and validated IDs cannot fail.
+        let _ = node.subscribe_message(cfg.feedback_id, DoF3rdTs::EXTENT_BYTES);
+        let _ = node.subscribe_message(
+            SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID),
+            Heartbeat::EXTENT_BYTES,
+        );
+        let init_end = now + Duration::from_secs_f64(cfg.excitation.init_duration);
+        Drive {
+            drive_id: cfg.drive_node_id,
+            cfg,
+            node,
+            phase: Phase::Init,
+            init_end,
+            pattern_start: None,
+            next_publish: now,
+            last_feedback: now,
+            last_now: now,
+            drive_uptime: None,
+            held: None,
+            held_deadline: now,
+            would_block: 0,
+            held_dropped: 0,
+            rows: 0,
+            estimator: LoadEstimator::new(),
+            next_progress: now,
+            rows_at_progress: 0,
+            recent: VecDeque::with_capacity(SNAPSHOT_SAMPLES),
+            setpoint: 0.0,
+            readiness: Readiness::SLEEP,
+            stopping: None,
+            standby_sent: 0,
+            zero_setpoints_sent: 0,
+            events: VecDeque::new(),
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &DriveConfig {
+        &self.cfg
+    }
+
+    /// Where the run is.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Rows recorded so far.
+    pub fn rows(&self) -> u64 {
+        self.rows
+    }
+
+    fn setpoint_deadline(&self) -> Duration {
+        Duration::from_secs_f64(self.cfg.setpoint_period * 2.0)
+    }
+
+    fn tx_counters(&self) -> TxCounters {
+        let tx: TxStats = self.node.stats().tx;
+        TxCounters {
+            would_block: self.would_block,
+            dropped: tx.expired + self.held_dropped,
+            superseded: tx.superseded,
+            refused: tx.refused,
+            purged: tx.purged,
+        }
+    }
+
+    fn estimate(&self) -> Option<Estimate> {
+        self.estimator
+            .estimate(&LoadBounds::default())
+            .ok()
+            .map(|e| Estimate {
+                j: e.mass,
+                c1: e.c1,
+                c2: e.c2,
+                j_stderr: e.mass_stderr,
+                c2_stderr: e.c2_stderr,
+            })
+    }
+
+    /// A copy of the state for a live view (the recent samples, the estimate, the counters).
+    pub fn snapshot(&self) -> DriveSnapshot {
+        DriveSnapshot {
+            phase: self.phase,
+            elapsed: self.elapsed(self.last_now),
+            setpoint: self.setpoint,
+            readiness: self.readiness,
+            recent: self.recent.iter().copied().collect(),
+            rows: self.rows,
+            estimate: self.estimate(),
+            tx: self.tx_counters(),
+            dropped_transfers: self.node.stats().rx.rejected_total(),
+        }
+    }
+
+    fn elapsed(&self, now: Instant) -> f64 {
+        self.pattern_start
+            .map_or(0.0, |p| now.saturating_duration_since(p).as_secs_f64())
+    }
+
+    /// Notes the time of a call; a step backwards, or forwards by more than the loop may sleep,
+    /// is a clock jump and stops the run.
+    fn observe(&mut self, now: Instant) {
+        let (last, max_gap) = (
+            self.last_now,
+            Duration::from_secs_f64((2.0 * self.cfg.setpoint_period).max(1.0)),
+        );
+        self.last_now = self.last_now.max(now);
+        if matches!(self.phase, Phase::Stopping | Phase::Stopped) {
+            return;
+        }
+        let step = if now + Duration::from_millis(1) < last {
+            Some(-(last.saturating_duration_since(now).as_secs_f64()))
+        } else if now.saturating_duration_since(last) > max_gap {
+            Some(now.saturating_duration_since(last).as_secs_f64())
+        } else {
+            None
+        };
+        if let Some(step) = step {
+            // From here on the new clock is the truth: the stop sequence runs on it.
+            self.last_now = now;
+            self.stop(now, StopReason::ClockJump { step });
+        }
+    }
+
+    fn publish(&mut self, now: Instant, readiness: u8, setpoint: f32, deadline: Duration) {
+        // A full queue refuses (counted in the node's stats); nothing else can fail here.
         if let Some(id) = self.cfg.readiness_id {
             let _ = self.node.publish_message(
                 now,
                 id,
                 Priority::HIGH,
                 &Readiness { value: readiness },
-                timeout,
+                deadline,
             );
         }
         let _ = self.node.publish_message(
@@ -163,169 +459,382 @@ impl Driver<'_> {
             self.cfg.setpoint_id,
             Priority::HIGH,
             &Vector31::splat(setpoint),
-            timeout,
+            deadline,
         );
+        self.readiness = readiness;
+        self.setpoint = setpoint;
     }
 
-    fn flush(&mut self, now: Instant) -> Result<(), String> {
-        while let Some(f) = self.node.poll_transmit(now) {
-            self.transport.send(&f).map_err(|e| e.to_string())?;
+    /// Moves the phases along: pattern start, end, deadman, setpoints, stop repeats, progress.
+    fn advance(&mut self, now: Instant) {
+        if self.phase == Phase::Init && now >= self.init_end {
+            self.phase = Phase::Pattern;
+            self.pattern_start = Some(self.init_end);
+            self.last_feedback = now;
+            self.next_progress = self.init_end + Duration::from_secs(1);
+            self.events.push_back(DriveEvent::PatternStarted);
         }
-        Ok(())
+        if self.phase == Phase::Pattern {
+            let elapsed = self.elapsed(now);
+            if elapsed >= self.cfg.excitation.duration {
+                self.stop(now, StopReason::Completed);
+            } else if now
+                .saturating_duration_since(self.last_feedback)
+                .as_secs_f64()
+                > self.cfg.deadman
+            {
+                self.stop(
+                    now,
+                    StopReason::LostFeedback {
+                        deadman: self.cfg.deadman,
+                    },
+                );
+            } else if now >= self.next_progress {
+                let estimate = if self.cfg.fit { self.estimate() } else { None };
+                self.events.push_back(DriveEvent::Progress(Progress {
+                    elapsed,
+                    feedback_per_s: self.rows - self.rows_at_progress,
+                    dropped_transfers: self.node.stats().rx.rejected_total(),
+                    tx: self.tx_counters(),
+                    estimate,
+                }));
+                self.rows_at_progress = self.rows;
+                self.next_progress = self.next_progress + Duration::from_secs(1);
+                if self.next_progress <= now {
+                    self.next_progress = now + Duration::from_secs(1);
+                }
+            }
+        }
+        if matches!(self.phase, Phase::Init | Phase::Pattern) && now >= self.next_publish {
+            let sp = match self.pattern_start {
+                None => self.cfg.excitation.hi,
+                Some(_) => self.cfg.excitation.setpoint(self.elapsed(now)),
+            };
+            self.publish(now, Readiness::ENGAGED, sp as f32, self.setpoint_deadline());
+            let period = Duration::from_secs_f64(self.cfg.setpoint_period);
+            self.next_publish = self.next_publish + period;
+            if self.next_publish <= now {
+                self.next_publish = now + period;
+            }
+        }
+        if let Some(s) = &self.stopping {
+            if self.phase == Phase::Stopping {
+                let (until, repeats_left, next) = (s.until, s.repeats_left, s.next);
+                if repeats_left > 0 && now >= next {
+                    let deadline = until.saturating_duration_since(now);
+                    self.publish(now, Readiness::STANDBY, 0.0, deadline);
+                    let period = Duration::from_secs_f64(self.cfg.setpoint_period);
+                    if let Some(s) = self.stopping.as_mut() {
+                        s.repeats_left -= 1;
+                        s.next = now + period;
+                    }
+                }
+                let left = self.stopping.as_ref().map_or(0, |s| s.repeats_left);
+                let drained =
+                    left == 0 && self.held.is_none() && self.node.is_transmit_queue_empty();
+                if drained || now >= until {
+                    self.finish(now);
+                }
+            }
+        }
     }
 
-    /// STANDBY and a zero setpoint, several times; errors are ignored (the bus may be broken,
-    /// but every attempt counts).
-    fn stop(&mut self) {
-        for _ in 0..STOP_REPEATS {
-            let now = HostClock::now();
-            self.publish(now, Readiness::STANDBY, 0.0);
-            let _ = self.flush(now);
-            std::thread::sleep(Duration::from_secs_f64(self.cfg.setpoint_period));
+    fn finish(&mut self, now: Instant) {
+        let Some(s) = self.stopping.as_ref() else {
+            return;
+        };
+        let reason = s.reason.clone();
+        // Whatever is still queued will never be sent.
+        if let Some(_f) = self.held.take() {
+            self.held_dropped += 1;
         }
+        self.held_dropped += self.node.transmit_queue_len() as u64;
+        self.last_now = self.last_now.max(now);
+        self.phase = Phase::Stopped;
+        self.events.push_back(DriveEvent::Stopped(StopReport {
+            reason,
+            rows: self.rows,
+            standby_sent: self.standby_sent,
+            zero_setpoints_sent: self.zero_setpoints_sent,
+            tx: self.tx_counters(),
+            estimate: self.estimate(),
+        }));
+    }
+
+    /// Begins the stop sequence (once; later calls are ignored): purges what is queued, puts
+    /// STANDBY and a zero setpoint first in line, and re-sends them [`STOP_REPEATS`] times within
+    /// [`STOP_WINDOW`].
+    pub fn stop(&mut self, now: Instant, reason: StopReason) {
+        if self.stopping.is_some() {
+            return;
+        }
+        self.node.purge_transmit();
+        if self.held.take().is_some() {
+            self.held_dropped += 1;
+        }
+        self.phase = Phase::Stopping;
+        self.events.push_back(DriveEvent::Stopping(reason.clone()));
+        self.stopping = Some(Stopping {
+            reason,
+            until: now + STOP_WINDOW,
+            repeats_left: STOP_REPEATS,
+            next: now,
+        });
+        self.advance(now);
+    }
+
+    /// Takes one received frame.
+    pub fn handle_frame(&mut self, now: Instant, frame: &Frame) {
+        self.observe(now);
+        self.advance(now);
+        let feedback_id = self.cfg.feedback_id;
+        let mut heartbeat = None;
+        let mut feedback = None;
+        if let Some(Event::Message {
+            subject_id,
+            source,
+            timestamp,
+            payload,
+            ..
+        }) = self.node.handle_frame(now, frame)
+        {
+            if subject_id == feedback_id {
+                if let Ok(fb) = DoF3rdTs::deserialize(payload) {
+                    feedback = Some((timestamp, source, fb));
+                }
+            } else if subject_id.get() == Heartbeat::FIXED_SUBJECT_ID {
+                if let (Some(src), Ok(hb)) = (source, Heartbeat::deserialize(payload)) {
+                    heartbeat = Some((src, hb.uptime));
+                }
+            }
+        }
+        if let Some((src, uptime)) = heartbeat {
+            if self.drive_id == Some(src) {
+                if let Some(before) = self.drive_uptime.filter(|b| uptime < *b) {
+                    self.stop(
+                        now,
+                        StopReason::DriveRebooted {
+                            node_id: src.get(),
+                            before,
+                            after: uptime,
+                        },
+                    );
+                }
+                self.drive_uptime = Some(uptime);
+            }
+        }
+        let Some((timestamp, source, fb)) = feedback else {
+            return;
+        };
+        if self.drive_id.is_none() {
+            self.drive_id = source;
+        }
+        // Feedback during the init phase is flushed, as the seed does.
+        if self.phase == Phase::Pattern {
+            self.last_feedback = now;
+            let sample = sample_of(&fb);
+            self.rows += 1;
+            if sample.is_finite() {
+                self.estimator
+                    .update(sample.force, sample.velocity, sample.acceleration);
+            }
+            if self.recent.len() == SNAPSHOT_SAMPLES {
+                self.recent.pop_front();
+            }
+            self.recent.push_back(sample);
+            self.events.push_back(DriveEvent::Row(Row {
+                ts_local: timestamp.as_secs_f64(),
+                sample,
+            }));
+        }
+    }
+
+    /// The next frame to send, if one is due. STANDBY is first after a stop.
+    #[must_use]
+    pub fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
+        self.observe(now);
+        self.advance(now);
+        if self.phase == Phase::Stopped {
+            return None;
+        }
+        let frame = match self.held.take() {
+            Some(f) if now <= self.held_deadline => Some(f),
+            Some(_) => {
+                self.held_dropped += 1;
+                self.node.poll_transmit(now)
+            }
+            None => self.node.poll_transmit(now),
+        }?;
+        if self.phase == Phase::Stopping {
+            self.count_stop_frame(&frame, 1);
+        }
+        Some(frame)
+    }
+
+    fn count_stop_frame(&mut self, frame: &Frame, sign: i32) {
+        let subject = subject_of(frame);
+        let add = |n: &mut u32| {
+            *n = if sign > 0 {
+                n.saturating_add(1)
+            } else {
+                n.saturating_sub(1)
+            }
+        };
+        if ends_transfer(frame) {
+            if subject == Some(self.cfg.setpoint_id.get()) {
+                add(&mut self.zero_setpoints_sent);
+            } else if subject.is_some() && subject == self.cfg.readiness_id.map(SubjectId::get) {
+                add(&mut self.standby_sent);
+            }
+        }
+    }
+
+    /// The link could not take `frame`, the last one polled: it is offered again until its
+    /// deadline (one setpoint deadline after it was first polled), then dropped and counted.
+    pub fn handle_blocked(&mut self, now: Instant, frame: Frame) {
+        self.would_block += 1;
+        if self.phase == Phase::Stopping {
+            self.count_stop_frame(&frame, -1);
+        }
+        if self.held.is_none() {
+            self.held_deadline = if self.phase == Phase::Stopping {
+                self.stopping.as_ref().map_or(now, |s| s.until)
+            } else {
+                frame.timestamp + self.setpoint_deadline()
+            };
+        }
+        self.held = Some(frame);
+    }
+
+    /// When to call [`Drive::poll_transmit`] next.
+    #[must_use]
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        match self.phase {
+            Phase::Stopped => None,
+            _ => {
+                // While the link refuses a frame, the queue waits behind it: come back to offer
+                // it again (the node would say "now" for its non-empty queue).
+                let t = if self.held.is_some() {
+                    self.last_now + RETRY_STEP
+                } else {
+                    self.node.poll_timeout().unwrap_or(self.next_publish)
+                };
+                match (&self.stopping, self.phase) {
+                    (Some(s), Phase::Stopping) => {
+                        let mut t = t.min(s.until);
+                        if s.repeats_left > 0 {
+                            t = t.min(s.next);
+                        }
+                        Some(t)
+                    }
+                    _ => {
+                        let mut t = t.min(self.next_publish);
+                        match self.phase {
+                            Phase::Init => t = t.min(self.init_end),
+                            _ => {
+                                let deadman = self.last_feedback
+                                    + Duration::from_secs_f64(self.cfg.deadman)
+                                    + Duration::from_micros(1);
+                                t = t.min(deadman).min(self.next_progress);
+                            }
+                        }
+                        Some(t)
+                    }
+                }
+            }
+        }
+    }
+
+    /// The next event.
+    #[must_use]
+    pub fn poll_event(&mut self) -> Option<DriveEvent> {
+        self.events.pop_front()
     }
 }
 
-/// Drives the stand until the pattern ends or `stop` is raised; writes the TSV to `out`.
-pub fn drive(
-    cfg: &DriveConfig,
+impl Machine for Drive {
+    type Event = DriveEvent;
+    fn handle_frame(&mut self, now: Instant, frame: &Frame) {
+        Drive::handle_frame(self, now, frame)
+    }
+    fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
+        Drive::poll_transmit(self, now)
+    }
+    fn handle_blocked(&mut self, now: Instant, frame: Frame) {
+        Drive::handle_blocked(self, now, frame)
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        Drive::poll_timeout(self)
+    }
+    fn poll_event(&mut self) -> Option<DriveEvent> {
+        Drive::poll_event(self)
+    }
+    fn handle_fault(&mut self, now: Instant, reason: StopReason) {
+        self.last_now = self.last_now.max(now);
+        self.stop(now, reason)
+    }
+    fn is_stopped(&self) -> bool {
+        self.phase == Phase::Stopped
+    }
+}
+
+/// What [`run_drive`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriveOutcome {
+    /// The machine's report: why it stopped, rows, stop commands handed out, counters.
+    pub report: StopReport,
+    /// What the loop saw of the link (did the stop commands leave the transport?).
+    pub link: RunOutcome,
+}
+
+impl DriveOutcome {
+    /// True when the stop commands were handed out and left the transport.
+    pub fn standby_delivered(&self, readiness: bool) -> bool {
+        self.report.stop_commands_sent(readiness) && self.link.flushed
+    }
+}
+
+/// Runs a [`Drive`] in real time on `transport` (see [`run_realtime`]): the TSV goes to `out`
+/// (header when the pattern starts, each row flushed as it comes), every other event to
+/// `on_event`.
+pub fn run_drive(
+    cfg: DriveConfig,
     transport: &mut dyn CanTransport,
-    out: &mut dyn Write,
+    clock: &dyn Clock,
     stop: &AtomicBool,
-    events: &mut dyn FnMut(DriveEvent),
+    out: &mut dyn Write,
+    on_event: &mut dyn FnMut(&DriveEvent),
 ) -> DriveOutcome {
-    let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
-    let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", mtu);
-    node_config.software_version.minor = 1;
-    let start = HostClock::now();
-    let mut d = Driver {
-        cfg,
-        node: HostNode::new(node_config, start),
-        transport,
-    };
-    let _ = d
-        .node
-        .subscribe_message(cfg.feedback_id, DoF3rdTs::EXTENT_BYTES);
-    let ex = cfg.excitation;
-    let period = Duration::from_secs_f64(cfg.setpoint_period);
-    let init_end = start + Duration::from_secs_f64(ex.init_duration);
-    let mut pattern_start: Option<Instant> = None;
-    let mut writer: Option<TsvWriter<&mut dyn Write>> = None;
+    let mut drive = Drive::new(cfg, clock.now());
     let mut out = Some(out);
-    let mut next_publish = start;
-    let mut last_feedback = start;
-    let mut rows = 0u64;
-    let mut estimator = LoadEstimator::<f64>::new();
-    let mut next_progress = start + Duration::from_secs(1);
-    let mut rows_at_progress = 0u64;
-    let reason = loop {
-        let now = HostClock::now();
-        if stop.load(Ordering::Relaxed) {
-            break StopReason::Signal;
-        }
-        // Phase changes.
-        if pattern_start.is_none() && now >= init_end {
-            pattern_start = Some(now);
-            last_feedback = now;
-            if let Some(o) = out.take() {
-                match TsvWriter::new(o, true) {
-                    Ok(w) => writer = Some(w),
-                    Err(e) => break StopReason::Error(format!("cannot write the TSV: {e}")),
+    let mut writer: Option<TsvWriter<&mut dyn Write>> = None;
+    let mut report = None;
+    let link = run_realtime(&mut drive, transport, clock, stop, &mut |event| {
+        match &event {
+            DriveEvent::PatternStarted => {
+                if let Some(o) = out.take() {
+                    writer = Some(TsvWriter::new(o, true).map_err(|e| e.to_string())?);
                 }
             }
-            events(DriveEvent::PatternStarted);
-        }
-        let elapsed = pattern_start.map(|p| now.saturating_duration_since(p).as_secs_f64());
-        if elapsed.is_some_and(|e| e >= ex.duration) {
-            break StopReason::Completed;
-        }
-        if pattern_start.is_some()
-            && now.saturating_duration_since(last_feedback).as_secs_f64() > cfg.deadman
-        {
-            break StopReason::LostFeedback;
-        }
-        if now >= next_publish {
-            let sp = match elapsed {
-                None => ex.hi,
-                Some(t) => ex.setpoint(t),
-            };
-            d.publish(now, Readiness::ENGAGED, sp as f32);
-            next_publish = next_publish + period;
-            if next_publish < now {
-                next_publish = now + period;
+            DriveEvent::Row(row) => {
+                if let Some(w) = writer.as_mut() {
+                    w.write(row).map_err(|e| e.to_string())?;
+                }
+                return Ok(());
             }
+            DriveEvent::Stopped(r) => report = Some(r.clone()),
+            _ => {}
         }
-        if let Err(e) = d.flush(now) {
-            break StopReason::Error(e);
-        }
-        let wait = next_publish
-            .saturating_duration_since(HostClock::now())
-            .min(Duration::from_millis(5));
-        let frame = match d.transport.receive(wait) {
-            Ok(f) => f,
-            Err(e) => break StopReason::Error(e.to_string()),
-        };
-        let Some(frame) = frame else { continue };
-        let event_now = HostClock::now();
-        let feedback = match d.node.handle_frame(event_now, &frame) {
-            Some(Event::Message {
-                subject_id,
-                timestamp,
-                payload,
-                ..
-            }) if subject_id == cfg.feedback_id => DoF3rdTs::deserialize(payload)
-                .ok()
-                .map(|fb| (timestamp, fb)),
-            _ => None,
-        };
-        let Some((timestamp, fb)) = feedback else {
-            continue;
-        };
-        // Feedback during the init phase is flushed, as the seed does.
-        let Some(w) = writer.as_mut() else { continue };
-        last_feedback = event_now;
-        let k = &fb.value.kinematics;
-        let sample = Sample {
-            t: fb.timestamp.microsecond as f64 * 1e-6,
-            force: f64::from(fb.value.force),
-            velocity: f64::from(k.base.velocity),
-            acceleration: f64::from(k.acceleration),
-            position: f64::from(k.base.position),
-        };
-        if let Err(e) = w.write(&Row {
-            ts_local: timestamp.as_secs_f64(),
-            sample,
-        }) {
-            break StopReason::Error(format!("cannot write the TSV: {e}"));
-        }
-        rows += 1;
-        if cfg.fit && sample.is_finite() {
-            estimator.update(sample.force, sample.velocity, sample.acceleration);
-        }
-        if event_now >= next_progress {
-            let estimate = cfg
-                .fit
-                .then(|| estimator.estimate(&LoadBounds::default()).ok())
-                .flatten()
-                .map(|e| (e.mass, e.c1, e.c2));
-            events(DriveEvent::Progress {
-                elapsed: elapsed.unwrap_or(0.0),
-                feedback_per_s: rows - rows_at_progress,
-                dropped_transfers: d.node.stats().rx.rejected_total(),
-                estimate,
-            });
-            rows_at_progress = rows;
-            next_progress = next_progress + Duration::from_secs(1);
-        }
-    };
-    d.stop();
-    let estimate = estimator
-        .estimate(&LoadBounds::default())
-        .ok()
-        .map(|e| (e.mass, e.c1, e.c2));
-    DriveOutcome {
-        reason,
-        rows,
-        estimate,
-    }
+        on_event(&event);
+        Ok(())
+    });
+    let report = report.unwrap_or_else(|| StopReport {
+        reason: StopReason::Transport("the drive loop ended before the drive stopped".into()),
+        rows: drive.rows(),
+        standby_sent: 0,
+        zero_setpoints_sent: 0,
+        tx: drive.tx_counters(),
+        estimate: drive.estimate(),
+    });
+    DriveOutcome { report, link }
 }

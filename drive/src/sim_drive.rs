@@ -1,25 +1,32 @@
-//! A simulated Telega as a Cyphal node.
+//! A simulated Telega as a Sans-IO Cyphal node.
 //!
 //! ```text
-//!  transport ─► Node::handle_frame ─► Readiness (torque only when ENGAGED), Vector31 setpoint
+//!  handle_frame ─► Node ─► Readiness (torque only when ENGAGED), Vector31 setpoint
 //!  every feedback interval: Stand::advance_to(t) ─► Stand::measure ─► DoF3rdTs (device timestamp)
-//!                           ─► Node::publish ─► transport
-//!  deadman: no setpoint for 0.5 s ⇒ zero torque
+//!                           ─► Node::publish ─► poll_transmit
+//!  deadman: no setpoint for SIM_DEADMAN ⇒ zero torque
+//!  heartbeat 1 Hz with its uptime (a new SimDrive is a rebooted drive)
 //! ```
-//! It runs the same stand model as `propid sim` (`propid_science::stand::Stand`), in real time.
+//! It runs the same stand model as `propid sim` (`propid_science::stand::Stand`).
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::collections::VecDeque;
+use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
-use propid_core::can::{Mtu, NodeId, Priority, SubjectId};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
-use propid_transport::{CanTransport, HostClock};
-
 use propid_science::stand::{Stand, StandConfig};
 
-use crate::HostNode;
+use propid_transport::CanTransport;
+
+use crate::drive::{check_mtu, check_range, ConfigError, DAY};
+use crate::realtime::{run_realtime, Clock};
+use crate::{HostNode, Machine, StopReason};
+
+/// The simulated drive zeroes its torque when no setpoint arrived for this long.
+pub const SIM_DEADMAN: Duration = Duration::from_millis(500);
 
 /// The simulated drive's settings.
 #[derive(Clone, Debug)]
@@ -28,7 +35,7 @@ pub struct SimDriveConfig {
     pub node_id: NodeId,
     /// 8 or 64.
     pub mtu: usize,
-    /// Readiness subject.
+    /// Readiness subject (no readiness gating when unset).
     pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
     pub setpoint_id: SubjectId,
@@ -60,6 +67,16 @@ impl SimDriveConfig {
             seed,
         }
     }
+
+    /// Checks every value before anything is sent.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        check_mtu(self.mtu)?;
+        check_range("interval", self.interval, 0.0, true, 1.0, "s")?;
+        check_range("duration", self.duration, 0.0, false, DAY, "s")?;
+        self.stand
+            .validate()
+            .map_err(|e| ConfigError::new("stand", e.0))
+    }
 }
 
 /// What the simulated drive saw.
@@ -77,96 +94,267 @@ pub struct SimDriveSummary {
     pub feedback_published: u64,
 }
 
-/// Runs the simulated drive until `stop` is raised or its duration ends.
-pub fn run_sim_drive(
-    cfg: &SimDriveConfig,
-    transport: &mut dyn CanTransport,
-    stop: &AtomicBool,
-) -> Result<SimDriveSummary, String> {
-    let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
-    let start = HostClock::now();
-    let mut node = HostNode::new(
-        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
-        start,
-    );
-    let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
-    if let Some(id) = cfg.readiness_id {
-        let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
-    }
-    let mut stand = Stand::new(cfg.stand, cfg.seed);
-    let mut summary = SimDriveSummary::default();
-    let interval = Duration::from_secs_f64(cfg.interval);
-    let mut next_feedback = start;
-    let mut last_setpoint_at: Option<Instant> = None;
-    let mut setpoint = 0.0f64;
-    loop {
-        let now = HostClock::now();
-        let t = now.saturating_duration_since(start).as_secs_f64();
-        if stop.load(Ordering::Relaxed) || (cfg.duration > 0.0 && t >= cfg.duration) {
-            return Ok(summary);
+/// What the simulated drive reports.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SimDriveEvent {
+    /// A feedback message was queued for sending.
+    Feedback(DoF3rdTs),
+    /// The readiness received changed.
+    Readiness(u8),
+    /// It stopped.
+    Stopped {
+        /// Why.
+        reason: StopReason,
+        /// What it saw.
+        summary: SimDriveSummary,
+    },
+}
+
+/// The simulated drive. See the module documentation.
+pub struct SimDrive {
+    cfg: SimDriveConfig,
+    node: HostNode,
+    stand: Stand,
+    start: Instant,
+    end: Option<Instant>,
+    interval: Duration,
+    next_feedback: Instant,
+    last_setpoint_at: Option<Instant>,
+    setpoint: f64,
+    summary: SimDriveSummary,
+    held: Option<Frame>,
+    stopped: bool,
+    last_now: Instant,
+    events: VecDeque<SimDriveEvent>,
+}
+
+impl SimDrive {
+    /// A simulated drive that boots now. `cfg` must have passed [`SimDriveConfig::validate`].
+    pub fn new(cfg: SimDriveConfig, now: Instant) -> Self {
+        let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
+        let mut node = HostNode::new(
+            NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
+            now,
+        );
+        // Fresh node, validated IDs, 8 ports: cannot fail.
+        let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
+        if let Some(id) = cfg.readiness_id {
+            let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
         }
-        if now >= next_feedback {
-            let engaged = match cfg.readiness_id {
-                Some(_) => summary.last_readiness == Some(Readiness::ENGAGED),
+        SimDrive {
+            stand: Stand::new(cfg.stand, cfg.seed),
+            end: (cfg.duration > 0.0).then(|| now + Duration::from_secs_f64(cfg.duration)),
+            interval: Duration::from_secs_f64(cfg.interval),
+            cfg,
+            node,
+            start: now,
+            next_feedback: now,
+            last_setpoint_at: None,
+            setpoint: 0.0,
+            summary: SimDriveSummary::default(),
+            held: None,
+            stopped: false,
+            last_now: now,
+            events: VecDeque::new(),
+        }
+    }
+
+    /// What it saw so far.
+    pub fn summary(&self) -> &SimDriveSummary {
+        &self.summary
+    }
+
+    /// The stand (for tests that compare with its state).
+    pub fn stand(&self) -> &Stand {
+        &self.stand
+    }
+
+    /// Stops (once): nothing more is sent.
+    pub fn stop(&mut self, _now: Instant, reason: StopReason) {
+        if self.stopped {
+            return;
+        }
+        self.stopped = true;
+        self.events.push_back(SimDriveEvent::Stopped {
+            reason,
+            summary: self.summary.clone(),
+        });
+    }
+
+    fn advance(&mut self, now: Instant) {
+        self.last_now = self.last_now.max(now);
+        if self.stopped {
+            return;
+        }
+        if self.end.is_some_and(|end| now >= end) {
+            self.stop(now, StopReason::Completed);
+            return;
+        }
+        while now >= self.next_feedback {
+            let at = self.next_feedback;
+            let t = at.saturating_duration_since(self.start).as_secs_f64();
+            let engaged = match self.cfg.readiness_id {
+                Some(_) => self.summary.last_readiness == Some(Readiness::ENGAGED),
                 None => true,
             };
-            let alive = last_setpoint_at
-                .is_some_and(|at| now.saturating_duration_since(at) < Duration::from_millis(500));
-            stand.set_setpoint(if engaged && alive { setpoint } else { 0.0 });
-            stand.advance_to(t);
-            let s = stand.measure();
+            let alive = self
+                .last_setpoint_at
+                .is_some_and(|s| at.saturating_duration_since(s) < SIM_DEADMAN);
+            self.stand
+                .set_setpoint(if engaged && alive { self.setpoint } else { 0.0 });
+            self.stand.advance_to(t);
+            let s = self.stand.measure();
             let mut fb = DoF3rdTs::default();
-            fb.timestamp.microsecond = (t * 1e6) as u64;
+            fb.timestamp.microsecond = (t * 1e6).round() as u64;
             fb.value.kinematics.base.position = s.position as f32;
             fb.value.kinematics.base.velocity = s.velocity as f32;
             fb.value.kinematics.acceleration = s.acceleration as f32;
             fb.value.force = s.force as f32;
-            if node
-                .publish_message(now, cfg.feedback_id, Priority::HIGH, &fb, interval * 5)
+            if self
+                .node
+                .publish_message(
+                    now,
+                    self.cfg.feedback_id,
+                    Priority::HIGH,
+                    &fb,
+                    self.interval * 5,
+                )
                 .is_ok()
             {
-                summary.feedback_published += 1;
+                self.summary.feedback_published += 1;
+                self.events.push_back(SimDriveEvent::Feedback(fb));
             }
-            next_feedback = next_feedback + interval;
-            if next_feedback < now {
-                next_feedback = now + interval;
+            self.next_feedback = self.next_feedback + self.interval;
+            if self.next_feedback + self.interval <= now {
+                // Far behind (a stalled caller): resume from now instead of bursting.
+                self.next_feedback = now + self.interval;
             }
         }
-        while let Some(f) = node.poll_transmit(now) {
-            transport.send(&f).map_err(|e| e.to_string())?;
+    }
+
+    /// Takes one received frame.
+    pub fn handle_frame(&mut self, now: Instant, frame: &Frame) {
+        self.advance(now);
+        if self.stopped {
+            return;
         }
-        let wait = next_feedback
-            .saturating_duration_since(HostClock::now())
-            .min(Duration::from_millis(5));
-        let Some(frame) = transport.receive(wait).map_err(|e| e.to_string())? else {
-            continue;
-        };
-        match node.handle_frame(HostClock::now(), &frame) {
+        let (setpoint_id, readiness_id) = (self.cfg.setpoint_id, self.cfg.readiness_id);
+        match self.node.handle_frame(now, frame) {
             Some(Event::Message {
                 subject_id,
                 payload,
                 ..
-            }) if subject_id == cfg.setpoint_id => {
+            }) if subject_id == setpoint_id => {
                 if let Ok(v) = Vector31::deserialize(payload) {
-                    setpoint = f64::from(v.value[0]);
-                    summary.last_setpoint = Some(v.value[0]);
-                    summary.setpoints += 1;
-                    last_setpoint_at = Some(HostClock::now());
+                    self.setpoint = f64::from(v.value[0]);
+                    self.summary.last_setpoint = Some(v.value[0]);
+                    self.summary.setpoints += 1;
+                    self.last_setpoint_at = Some(now);
                 }
             }
             Some(Event::Message {
                 subject_id,
                 payload,
                 ..
-            }) if Some(subject_id) == cfg.readiness_id => {
+            }) if Some(subject_id) == readiness_id => {
                 if let Ok(r) = Readiness::deserialize(payload) {
-                    if summary.last_readiness != Some(r.value) {
-                        summary.readiness_changes.push(r.value);
+                    if self.summary.last_readiness != Some(r.value) {
+                        self.summary.readiness_changes.push(r.value);
+                        self.events.push_back(SimDriveEvent::Readiness(r.value));
                     }
-                    summary.last_readiness = Some(r.value);
+                    self.summary.last_readiness = Some(r.value);
                 }
             }
             _ => {}
         }
+    }
+
+    /// The next frame to send (feedback, heartbeat), if one is due.
+    #[must_use]
+    pub fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
+        self.advance(now);
+        if self.stopped {
+            return None;
+        }
+        self.held.take().or_else(|| self.node.poll_transmit(now))
+    }
+
+    /// The link refused `frame`: offered again on the next poll (feedback that waited too long
+    /// expires in the node's queue instead).
+    pub fn handle_blocked(&mut self, _now: Instant, frame: Frame) {
+        self.held = Some(frame);
+    }
+
+    /// When to call again.
+    #[must_use]
+    pub fn poll_timeout(&self) -> Option<Instant> {
+        if self.stopped {
+            return None;
+        }
+        let mut t = self.next_feedback;
+        if self.held.is_some() {
+            // The queue waits behind the refused frame: come back to offer it again.
+            t = t.min(self.last_now + Duration::from_millis(1));
+        } else if let Some(n) = self.node.poll_timeout() {
+            t = t.min(n);
+        }
+        if let Some(end) = self.end {
+            t = t.min(end);
+        }
+        Some(t)
+    }
+
+    /// The next event.
+    #[must_use]
+    pub fn poll_event(&mut self) -> Option<SimDriveEvent> {
+        self.events.pop_front()
+    }
+}
+
+impl Machine for SimDrive {
+    type Event = SimDriveEvent;
+    fn handle_frame(&mut self, now: Instant, frame: &Frame) {
+        SimDrive::handle_frame(self, now, frame)
+    }
+    fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
+        SimDrive::poll_transmit(self, now)
+    }
+    fn handle_blocked(&mut self, now: Instant, frame: Frame) {
+        SimDrive::handle_blocked(self, now, frame)
+    }
+    fn poll_timeout(&self) -> Option<Instant> {
+        SimDrive::poll_timeout(self)
+    }
+    fn poll_event(&mut self) -> Option<SimDriveEvent> {
+        SimDrive::poll_event(self)
+    }
+    fn handle_fault(&mut self, now: Instant, reason: StopReason) {
+        self.stop(now, reason)
+    }
+    fn is_stopped(&self) -> bool {
+        self.stopped
+    }
+}
+
+/// Runs a [`SimDrive`] in real time on `transport` until `stop` is raised or its duration ends.
+/// A transport fault is an error (its sentence); otherwise what it saw.
+pub fn run_sim_drive(
+    cfg: SimDriveConfig,
+    transport: &mut dyn CanTransport,
+    clock: &dyn Clock,
+    stop: &AtomicBool,
+) -> Result<SimDriveSummary, String> {
+    let mut sim = SimDrive::new(cfg, clock.now());
+    let mut end = None;
+    run_realtime(&mut sim, transport, clock, stop, &mut |event| {
+        if let SimDriveEvent::Stopped { reason, summary } = event {
+            end = Some((reason, summary));
+        }
+        Ok(())
+    });
+    match end {
+        Some((StopReason::Completed | StopReason::Signal, summary)) => Ok(summary),
+        Some((reason, _)) => Err(reason.to_string()),
+        None => Err("the simulated drive's loop ended before it stopped".into()),
     }
 }

@@ -4,14 +4,17 @@
 
 mod common;
 
+use std::os::fd::AsRawFd;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use propid_core::dsdl::Readiness;
-use propid_drive::drive::{drive, DriveConfig, StopReason};
+use propid_drive::drive::{run_drive, DriveConfig};
+use propid_drive::realtime::SystemClock;
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig, SimDriveSummary};
+use propid_drive::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 use propid_slcan::SlcanTransport;
@@ -30,8 +33,8 @@ fn start_telega(
     let stop = Arc::new(AtomicBool::new(false));
     let s = Arc::clone(&stop);
     let handle = std::thread::spawn(move || {
-        let mut t = SlcanTransport::from_port(Box::new(port), "telega");
-        run_sim_drive(&sim_cfg(), &mut t, &s)
+        let mut t = SlcanTransport::from_tty(port, "telega").unwrap();
+        run_sim_drive(sim_cfg(), &mut t, &SystemClock, &s)
     });
     (stop, handle)
 }
@@ -71,17 +74,29 @@ fn drives_the_simulated_telega_and_fits_it() {
         })
     };
     let mut out = Vec::new();
-    let mut t = SlcanTransport::from_port(Box::new(drive_end), "driver");
-    let outcome = drive(&cfg, &mut t, &mut out, &AtomicBool::new(false), &mut |_| {});
+    let mut t = SlcanTransport::from_tty(drive_end, "driver").unwrap();
+    let outcome = run_drive(
+        cfg,
+        &mut t,
+        &SystemClock,
+        &AtomicBool::new(false),
+        &mut out,
+        &mut |_| {},
+    );
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     let summary = telega.join().unwrap().unwrap();
-    assert_eq!(outcome.reason, StopReason::Completed);
+    assert_eq!(outcome.report.reason, StopReason::Completed);
+    assert!(outcome.standby_delivered(true), "{outcome:?}");
     let text = String::from_utf8(out).unwrap();
     let rows = check_tsv(&text);
     // 10 s of feedback at 500 Hz; scheduling on a loaded CI machine may lose a few percent.
-    assert!((4500..=5010).contains(&rows), "{rows} rows");
-    assert_eq!(rows as u64, outcome.rows);
+    assert!(
+        (4500..=5010).contains(&rows),
+        "{rows} rows; {} feedback published",
+        summary.feedback_published
+    );
+    assert_eq!(rows as u64, outcome.report.rows);
     assert_eq!(
         summary.last_readiness,
         Some(Readiness::STANDBY),
@@ -202,4 +217,70 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
         // Refused before the interface was touched.
         assert!(!err.contains("null-not-opened"), "{err}");
     }
+}
+
+#[test]
+fn the_serial_device_vanishing_midway_stops_with_a_clear_reason_and_every_row() {
+    let (telega_end, driver_end) = TTYPort::pair().unwrap();
+    // The child must not inherit the simulated drive's end, or it never closes.
+    for raw in [telega_end.as_raw_fd(), driver_end.as_raw_fd()] {
+        // SAFETY: `raw` is an open descriptor owned by a TTYPort that outlives this borrow.
+        let fd = unsafe { std::os::fd::BorrowedFd::borrow_raw(raw) };
+        rustix::io::fcntl_setfd(fd, rustix::io::FdFlags::CLOEXEC).unwrap();
+    }
+    let path = driver_end.name().expect("the pty has a path");
+    let (stop, telega) = start_telega(telega_end);
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("run.tsv");
+    let child = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .args([
+            "drive",
+            "--iface",
+            &format!("slcan:{path}"),
+            "--pattern-duration",
+            "60",
+            "--init-duration",
+            "0.5",
+            "--deadman",
+            "5",
+            "-o",
+        ])
+        .arg(&tsv)
+        .env("UAVCAN__NODE__ID", "10")
+        .env("UAVCAN__PUB__READINESS__ID", "10")
+        .env("UAVCAN__PUB__SP_RAT__ID", "24")
+        .env("UAVCAN__SUB__FB_DYN__ID", "110")
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let t0 = Instant::now();
+    while std::fs::read_to_string(&tsv)
+        .map(|s| s.lines().count())
+        .unwrap_or(0)
+        <= 201
+    {
+        assert!(
+            t0.elapsed() < Duration::from_secs(20),
+            "no feedback recorded"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    // Unplug: the other end of the pseudo-terminal closes (the simulated drive's thread ends and
+    // drops it; the test's own handle on the device side goes too).
+    stop.store(true, Ordering::Relaxed);
+    telega.join().unwrap().unwrap();
+    drop(driver_end);
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("device vanished"), "{err}");
+    assert!(err.contains("NOT confirmed sent"), "{err}");
+    let rows = check_tsv(&std::fs::read_to_string(&tsv).unwrap());
+    let reported: usize = err
+        .split(" rows written")
+        .next()
+        .and_then(|s| s.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(rows, reported, "every row counted reached the file");
 }

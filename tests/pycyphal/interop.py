@@ -42,6 +42,7 @@ async def main() -> None:
 
     sub_ready.receive_in_background(on_ready)
     sub_sp.receive_in_background(on_sp)
+    print("ready", file=sys.stderr, flush=True)
     sent = []
     loop = asyncio.get_event_loop()
     end = loop.time() + seconds

@@ -17,8 +17,10 @@ use anyhow::Context;
 use propid_core::dsdl::Readiness;
 use propid_transport::CanTransport;
 
-use propid_drive::drive::{drive, DriveConfig, StopReason};
+use propid_drive::drive::{run_drive, DriveConfig};
+use propid_drive::realtime::SystemClock;
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
+use propid_drive::StopReason;
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
@@ -64,7 +66,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         init_duration: args.init_duration,
         pattern: args.pattern,
     };
-    excitation.validate()?;
+    let cfg = DriveConfig {
+        fit: true,
+        ..DriveConfig::example(excitation)
+    };
+    cfg.validate().map_err(|e| {
+        // The demo's own flags: --duration and --init-duration.
+        let e = crate::cmd::drive::flag_error(e);
+        crate::InputError(
+            e.0.replace("--pattern-duration (PATTERN_DURATION)", "--duration")
+                .replace(" (INIT_DURATION)", ""),
+        )
+    })?;
     let (mut transport, mut telega_end, pty) = link()?;
     eprintln!(
         "demo: simulated Telega (J = {:.2e} kg·m², c2 = {:.2e}, hidden torque lag {} ms) and the driver talk SLCAN over {pty}",
@@ -76,19 +89,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let stop_sim = Arc::new(AtomicBool::new(false));
     let telega = {
         let stop = Arc::clone(&stop_sim);
-        std::thread::spawn(move || run_sim_drive(&sim_cfg, telega_end.as_mut(), &stop))
-    };
-    let cfg = DriveConfig {
-        fit: true,
-        ..DriveConfig::example(excitation)
+        std::thread::spawn(move || run_sim_drive(sim_cfg, telega_end.as_mut(), &SystemClock, &stop))
     };
     let tsv = args.out.join("run.tsv");
     let mut file =
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
     let never = AtomicBool::new(false);
-    let outcome = drive(&cfg, transport.as_mut(), &mut file, &never, &mut |e| {
-        crate::cmd::drive::print_event(e, &excitation, true)
-    });
+    let outcome = run_drive(
+        cfg,
+        transport.as_mut(),
+        &SystemClock,
+        &never,
+        &mut file,
+        &mut |e| crate::cmd::drive::print_event(e, &excitation, true),
+    );
     // Give the last STANDBY frames time to arrive before the simulated drive stops.
     std::thread::sleep(std::time::Duration::from_millis(100));
     stop_sim.store(true, Ordering::Relaxed);
@@ -96,12 +110,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .join()
         .map_err(|_| anyhow::anyhow!("the simulated drive panicked"))?
         .map_err(anyhow::Error::msg)?;
-    if outcome.reason != StopReason::Completed {
-        anyhow::bail!("the drive stopped early: {:?}", outcome.reason);
+    if outcome.report.reason != StopReason::Completed {
+        anyhow::bail!("the drive stopped early: {}", outcome.report.reason);
     }
+    let standby_last =
+        summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);
     eprintln!(
-        "demo: {} rows recorded; the simulated Telega last saw readiness {:?} and setpoint {:?}",
-        outcome.rows, summary.last_readiness, summary.last_setpoint
+        "demo: {} rows recorded; the simulated Telega {} last",
+        outcome.report.rows,
+        if standby_last {
+            "saw STANDBY and a zero setpoint"
+        } else {
+            "did NOT see STANDBY and a zero setpoint"
+        }
     );
 
     // Fit, as the seed regressor would, and plot.
@@ -126,20 +147,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     )?;
     crate::plot::write(&args.out.join("diagnose.svg"), &report_figure(&report))?;
 
-    let standby_last =
-        summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);
     let mut md = String::new();
     md += "# propid demo\n\n";
     md += &format!(
         "A simulated Telega (inertia {:.3e} kg·m², drag {:.3e} N·m·s²/rad², a hidden torque lag of {} ms) was driven \
-         over SLCAN on a pseudo-terminal for {} s ({:?} pattern); {} feedback rows were recorded in `run.tsv`. \
+         over SLCAN on a pseudo-terminal for {} s ({} pattern); {} feedback rows were recorded in `run.tsv`. \
          After the pattern the driver commanded STANDBY and a zero setpoint: {}.\n\n",
         stand.inertia,
         stand.c2,
         stand.torque_lag * 1e3,
         args.duration,
         args.pattern,
-        outcome.rows,
+        outcome.report.rows,
         if standby_last { "the simulated drive saw STANDBY last" } else { "the simulated drive did NOT see STANDBY last" }
     );
     md += "## Fit (the seed's model and bounds, solved exactly)\n\n```yaml\n";

@@ -1,5 +1,5 @@
 //! `propid drive`: argument parsing, the signal handlers, progress lines and exit codes around
-//! [`propid_drive::drive`].
+//! [`propid_drive::drive::run_drive`].
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -8,7 +8,9 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use propid_core::can::{NodeId, SubjectId};
-use propid_drive::drive::{drive, DriveConfig, DriveEvent, StopReason, STOP_REPEATS};
+use propid_drive::drive::{run_drive, ConfigError, DriveConfig, DriveEvent, Progress};
+use propid_drive::realtime::SystemClock;
+use propid_drive::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 
 use crate::InputError;
@@ -53,6 +55,10 @@ pub struct Args {
     /// Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s].
     #[arg(long, default_value_t = 0.5)]
     pub deadman: f64,
+    /// Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of
+    /// the first feedback message).
+    #[arg(long)]
+    pub drive_node_id: Option<NodeId>,
     /// Print the running estimate of J, c1, c2 on stderr while driving.
     #[arg(long)]
     pub fit: bool,
@@ -102,10 +108,39 @@ impl Args {
             },
             setpoint_period: self.setpoint_period,
             deadman: self.deadman,
+            drive_node_id: self.drive_node_id,
             fit: self.fit,
         };
-        cfg.validate()?;
+        cfg.validate().map_err(flag_error)?;
         Ok(cfg)
+    }
+}
+
+/// A configuration error in the words of the command line: the flag (and its register
+/// variable, where it has one) and what is wrong.
+pub fn flag_error(e: ConfigError) -> InputError {
+    let (flag, var) = match e.setting {
+        "node_id" => ("--node-id", Some("UAVCAN__NODE__ID")),
+        "setpoint_id" => ("--setpoint-id", Some("UAVCAN__PUB__SP_RAT__ID")),
+        "feedback_id" => ("--feedback-id", Some("UAVCAN__SUB__FB_DYN__ID")),
+        "readiness_id" => ("--readiness-id", Some("UAVCAN__PUB__READINESS__ID")),
+        "setpoint_lo" | "setpoint_hi" | "setpoint_rat_lo_hi" => {
+            ("--setpoint-rat-lo-hi", Some("SETPOINT_RAT_LO_HI"))
+        }
+        "period" => ("--period", Some("PERIOD")),
+        "pattern_duration" => ("--pattern-duration", Some("PATTERN_DURATION")),
+        "init_duration" => ("--init-duration", Some("INIT_DURATION")),
+        "setpoint_period" => ("--setpoint-period", Some("SETPOINT_PERIOD")),
+        "deadman" => ("--deadman", None),
+        "drive_node_id" => ("--drive-node-id", None),
+        "mtu" => ("--mtu", None),
+        "interval" => ("--interval", None),
+        "duration" => ("--duration", None),
+        other => return InputError(format!("{other}: {}", e.problem)),
+    };
+    match var {
+        Some(var) => InputError(format!("{flag} ({var}) {}", e.problem)),
+        None => InputError(format!("{flag} {}", e.problem)),
     }
 }
 
@@ -124,35 +159,39 @@ pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
     }
 }
 
-/// Prints a drive's events on stderr (`progress` off: only the start of the pattern).
-pub fn print_event(event: DriveEvent, excitation: &Excitation, progress: bool) {
+/// Prints a drive's events on stderr (`progress` off: only the stop).
+pub fn print_event(event: &DriveEvent, excitation: &Excitation, progress: bool) {
     match event {
-        DriveEvent::PatternStarted => {
-            if progress {
-                eprintln!(
-                    "drive: pattern commenced ({}, {} s)",
-                    excitation.pattern, excitation.duration
-                );
-            }
+        DriveEvent::PatternStarted if progress => eprintln!(
+            "drive: pattern commenced ({}, {} s)",
+            excitation.pattern, excitation.duration
+        ),
+        DriveEvent::Progress(p) if progress => eprintln!("{}", progress_line(p, excitation)),
+        DriveEvent::Stopping(reason) => {
+            eprintln!("drive: stopping ({reason}): STANDBY and a zero setpoint first in line")
         }
-        DriveEvent::Progress {
-            elapsed,
-            feedback_per_s,
-            dropped_transfers,
-            estimate,
-        } => {
-            if progress {
-                let mut line = format!(
-                    "drive: pattern {elapsed:.1}/{:.0} s, feedback {feedback_per_s} /s, dropped transfers {dropped_transfers}",
-                    excitation.duration
-                );
-                if let Some((j, _, c2)) = estimate {
-                    line += &format!(", J = {j:.4e}, c2 = {c2:.4e}");
-                }
-                eprintln!("{line}");
-            }
-        }
+        _ => {}
     }
+}
+
+fn progress_line(p: &Progress, excitation: &Excitation) -> String {
+    let mut line = format!(
+        "drive: pattern {:.1}/{:.0} s, feedback {} /s, dropped transfers {}, frames dropped {}",
+        p.elapsed, excitation.duration, p.feedback_per_s, p.dropped_transfers, p.tx.dropped
+    );
+    if p.tx.would_block > 0 {
+        line += &format!(
+            " (link busy {} times, {} setpoints superseded)",
+            p.tx.would_block, p.tx.superseded
+        );
+    }
+    if let Some(e) = p.estimate {
+        line += &format!(
+            ", J = {:.4e} ± {:.1e}, c2 = {:.4e} ± {:.1e}",
+            e.j, e.j_stderr, e.c2, e.c2_stderr
+        );
+    }
+    line
 }
 
 /// Runs `propid drive`.
@@ -168,26 +207,49 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Box::new(std::io::stdout()),
     };
     let excitation = cfg.excitation;
-    let outcome = drive(&cfg, transport.as_mut(), &mut out, &stop, &mut |e| {
-        print_event(e, &excitation, args.progress)
-    });
-    let why = match &outcome.reason {
-        StopReason::Completed => "the pattern is complete".to_string(),
-        StopReason::Signal => "interrupted by a signal".to_string(),
-        StopReason::LostFeedback => format!("no feedback for {} s (deadman)", cfg.deadman),
-        StopReason::Error(e) => format!("error: {e}"),
+    let readiness = cfg.readiness_id.is_some();
+    let fit = cfg.fit;
+    let outcome = run_drive(
+        cfg,
+        transport.as_mut(),
+        &SystemClock,
+        &stop,
+        &mut out,
+        &mut |e| print_event(e, &excitation, args.progress),
+    );
+    let r = &outcome.report;
+    let delivered = if outcome.standby_delivered(readiness) {
+        format!(
+            "STANDBY and a zero setpoint sent ({} and {} times)",
+            r.standby_sent, r.zero_setpoints_sent
+        )
+    } else {
+        format!(
+            "STANDBY and a zero setpoint NOT confirmed sent ({} and {} handed to the link{})",
+            r.standby_sent,
+            r.zero_setpoints_sent,
+            outcome
+                .link
+                .link_fault
+                .as_ref()
+                .map(|f| format!("; the link failed: {f}"))
+                .unwrap_or_default()
+        )
     };
     eprintln!(
-        "drive: stopped ({why}); STANDBY and a zero setpoint sent {STOP_REPEATS} times; {} rows written",
-        outcome.rows
+        "drive: stopped ({}); {delivered}; {} rows written; frames dropped {} (link busy {} times, {} setpoints superseded, {} refused by a full queue)",
+        r.reason, r.rows, r.tx.dropped, r.tx.would_block, r.tx.superseded, r.tx.refused
     );
-    if let Some((m, c1, c2)) = outcome.estimate.filter(|_| cfg.fit) {
-        eprintln!("drive: running estimate J = {m:.6e}, c1 = {c1:.3e}, c2 = {c2:.6e}");
+    if let Some(e) = r.estimate.filter(|_| fit) {
+        eprintln!(
+            "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
+            e.j, e.j_stderr, e.c1, e.c2, e.c2_stderr
+        );
     }
-    match outcome.reason {
-        StopReason::Completed => Ok(()),
+    match &r.reason {
+        StopReason::Completed if outcome.standby_delivered(readiness) => Ok(()),
+        StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
         StopReason::Signal => std::process::exit(130),
-        StopReason::LostFeedback => anyhow::bail!("feedback lost"),
-        StopReason::Error(e) => anyhow::bail!(e),
+        reason => anyhow::bail!("{reason}"),
     }
 }

@@ -6,10 +6,10 @@ use std::sync::Arc;
 
 use propid_core::can::{NodeId, SubjectId};
 use propid_core::dsdl::Readiness;
+use propid_drive::realtime::SystemClock;
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
 
 use crate::cmd::sim::StandArgs;
-use crate::InputError;
 
 /// Arguments of `propid sim-drive`.
 #[derive(clap::Args, Debug, Clone)]
@@ -51,13 +51,6 @@ fn readiness_name(v: u8) -> &'static str {
 
 /// Runs `propid sim-drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if args.interval.is_nan() || args.interval <= 0.0 {
-        return Err(InputError(format!(
-            "--interval must be positive (got {})",
-            args.interval
-        ))
-        .into());
-    }
     let cfg = SimDriveConfig {
         node_id: args.node_id,
         mtu: args.bus.mtu,
@@ -69,6 +62,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand: args.stand.config()?,
         seed: args.stand.seed,
     };
+    cfg.validate().map_err(crate::cmd::drive::flag_error)?;
     let mut transport = args.bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     crate::signals::install(&stop)?;
@@ -78,13 +72,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         transport.name(),
         cfg.feedback_id
     );
-    let summary = run_sim_drive(&cfg, transport.as_mut(), &stop).map_err(anyhow::Error::msg)?;
+    let summary =
+        run_sim_drive(cfg, transport.as_mut(), &SystemClock, &stop).map_err(anyhow::Error::msg)?;
     eprintln!(
-        "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {:?}",
+        "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {}",
         summary.setpoints,
         summary.feedback_published,
         summary.last_readiness.map_or("none", readiness_name),
-        summary.last_setpoint
+        summary
+            .last_setpoint
+            .map_or("none".to_string(), |v| v.to_string())
     );
     Ok(())
 }

@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Interop with the reference stack, PyCyphal 1.27.1 over an SLCAN socat pty (ci/setup.sh installs
+# pycyphal[transport-can-pythoncan] and socat): values both ways at a 50 ms setpoint period, and the
+# seed's 5 ms period, which python-can's slcan reader may not drain: the run completes, drops are
+# reported, and PyCyphal's last readiness is STANDBY and its last setpoint zero.
+set -euo pipefail
+cargo test -q -p propid --test pycyphal_interop -- --ignored
