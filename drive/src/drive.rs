@@ -119,6 +119,9 @@ pub struct DriveConfig {
     pub deadman: f64,
     /// Keep a running estimate of J, c1, c2 (reported in [`Progress`]).
     pub fit: bool,
+    /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
+    /// most this (checked once a second); `None`: run the whole pattern.
+    pub until_rel_stderr: Option<f64>,
 }
 
 impl DriveConfig {
@@ -136,6 +139,7 @@ impl DriveConfig {
             setpoint_period: 0.005,
             deadman: 0.5,
             fit: false,
+            until_rel_stderr: None,
         }
     }
 
@@ -490,6 +494,22 @@ impl Drive {
                     },
                 );
             } else if now >= self.next_progress {
+                let precise = self.cfg.until_rel_stderr.and_then(|target| {
+                    let e = self.estimate()?;
+                    let (rj, rc) = (e.j_stderr / e.j.abs(), e.c2_stderr / e.c2.abs());
+                    (rj <= target && rc <= target).then_some((rj, rc))
+                });
+                if let Some((rel_j, rel_c2)) = precise {
+                    self.stop(
+                        now,
+                        StopReason::Precise {
+                            elapsed,
+                            rel_j,
+                            rel_c2,
+                        },
+                    );
+                    return;
+                }
                 let estimate = if self.cfg.fit { self.estimate() } else { None };
                 self.events.push_back(DriveEvent::Progress(Progress {
                     elapsed,

@@ -73,6 +73,15 @@ pub trait Machine {
 pub enum StopReason {
     /// The pattern (or the simulated drive's duration) ran to its end.
     Completed,
+    /// The running estimate reached the precision asked for (`--until-stderr`).
+    Precise {
+        /// Seconds into the pattern.
+        elapsed: f64,
+        /// Relative standard error of J then.
+        rel_j: f64,
+        /// Relative standard error of c2 then.
+        rel_c2: f64,
+    },
     /// SIGINT or SIGTERM (or the caller's stop flag).
     Signal,
     /// No feedback for longer than the deadman timeout [s].
@@ -109,7 +118,7 @@ pub enum StopReason {
 impl StopReason {
     /// True for every reason except a completed run.
     pub fn is_fault(&self) -> bool {
-        !matches!(self, StopReason::Completed)
+        !matches!(self, StopReason::Completed | StopReason::Precise { .. })
     }
 }
 
@@ -117,6 +126,16 @@ impl std::fmt::Display for StopReason {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             StopReason::Completed => write!(f, "the pattern is complete"),
+            StopReason::Precise {
+                elapsed,
+                rel_j,
+                rel_c2,
+            } => write!(
+                f,
+                "precise enough after {elapsed:.1} s of the pattern (relative standard error J {:.3} %, c2 {:.3} %)",
+                100.0 * rel_j,
+                100.0 * rel_c2
+            ),
             StopReason::Signal => write!(f, "interrupted by a signal"),
             StopReason::LostFeedback { deadman } => {
                 write!(f, "no feedback for {deadman} s (deadman)")

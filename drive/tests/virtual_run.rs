@@ -531,3 +531,48 @@ fn a_fault_from_the_loop_puts_standby_first_and_keeps_rows() {
         assert_standby_first(&run, stopping_at(&run));
     }
 }
+
+/// `--until-stderr`: the drive stops, with STANDBY first as always, once the running estimate is
+/// as precise as asked — within 20 % of the time `propid plan` predicts for that precision.
+#[test]
+fn until_stderr_stops_when_precise_near_the_planned_time() {
+    use propid_science::plan::{design, Constraints, Prior};
+    let stand = StandConfig::default();
+    let target = 1.5e-4;
+    let plan = design(
+        &Prior::new(stand.inertia, stand.c2, stand.max_torque),
+        &Constraints {
+            lo: 0.1,
+            hi: 0.9,
+            max_speed: None,
+            max_duration: 200.0,
+        },
+        Some(target),
+    )
+    .unwrap();
+    let predicted = plan.predicted.seconds;
+    let cfg = DriveConfig {
+        until_rel_stderr: Some(target),
+        ..DriveConfig::example(Excitation {
+            duration: 200.0,
+            init_duration: 1.0,
+            ..plan.excitation
+        })
+    };
+    let (run, _, _) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
+    let report = run.report.clone().unwrap();
+    let StopReason::Precise {
+        elapsed,
+        rel_j,
+        rel_c2,
+    } = report.reason
+    else {
+        panic!("{:?}", report.reason)
+    };
+    assert!(rel_j <= target && rel_c2 <= target);
+    assert!(
+        (elapsed / predicted - 1.0).abs() <= 0.2,
+        "stopped after {elapsed:.1} s, predicted {predicted:.1} s"
+    );
+    assert_standby_first(&run, stopping_at(&run) - 1e-3);
+}
