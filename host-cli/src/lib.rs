@@ -10,12 +10,15 @@
 //!  propid-io         the TSV sample stream, importers, candump logs
 //!  propid-science    excitation, stand simulators, fit, diagnosis
 //!  propid-drive      the driver and the simulated Telega
+//!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
 //!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
 //! ```
 #![deny(missing_docs)]
 
 pub mod bus;
 pub mod cmd;
+pub mod html;
+pub mod live;
 pub mod plot;
 pub mod signals;
 

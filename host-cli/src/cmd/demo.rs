@@ -154,16 +154,30 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     md += &text;
     md += "```\n\n![diagnosis](diagnose.svg)\n";
     std::fs::write(args.out.join("report.md"), &md)?;
+    let reproduce = [format!(
+        "propid demo --out {} --duration {} --init-duration {} --pattern {} --torque-lag {} --seed {}",
+        args.out.display(),
+        args.duration,
+        args.init_duration,
+        args.pattern,
+        args.torque_lag,
+        args.seed
+    )];
+    let page = crate::cmd::report::build(&tsv, &fit_options, &reproduce)?;
+    let html_path = args.out.join("report.html");
+    std::fs::write(&html_path, page)
+        .with_context(|| format!("cannot write {}", html_path.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{text}")?;
     writeln!(
         out,
-        "demo: fit J = {:.4e} kg·m², c2 = {:.4e} (truth {:.4e}, {:.4e}); report in {}",
+        "demo: fit J = {:.4e} kg·m², c2 = {:.4e} (truth {:.4e}, {:.4e}); report in {} (open {} in a browser)",
         fit.mass,
         fit.c2,
         stand.inertia,
         stand.c2,
-        args.out.join("report.md").display()
+        args.out.join("report.md").display(),
+        html_path.display()
     )?;
     if !standby_last {
         anyhow::bail!("the simulated drive did not see STANDBY last");

@@ -6,5 +6,6 @@ pub mod drive;
 pub mod fit;
 pub mod import;
 pub mod replay;
+pub mod report;
 pub mod sim;
 pub mod sim_drive;
