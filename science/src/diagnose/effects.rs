@@ -18,9 +18,9 @@ use propid_core::estimate::NormalEquations;
 
 use super::signals::{correlation, Signals};
 use super::{
-    Ambiguity, BaseModel, CandidateScore, NamedEffect, Options, Report, ResidualAnalysis,
-    SimulationRms, Traces, Unexplained, Verdict, FOLDS, HOLDOUT, MAX_SIM_LOSS, MIN_FOLDS_BETTER,
-    MIN_GAIN,
+    Ambiguity, BaseModel, CandidateScore, Concentration, NamedEffect, Options, Report,
+    ResidualAnalysis, SimulationRms, Traces, Unexplained, Verdict, CONCENTRATED, FOLDS, HOLDOUT,
+    MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
 use propid_io::InputError;
 
@@ -908,6 +908,9 @@ fn separating_pattern(a: EffectKind, b: EffectKind) -> &'static str {
     if pair(CoulombFriction, ForceOffset) {
         "a pattern that reverses the rotor (`propid drive --pattern chirp --lo -0.5 --hi 0.9`): \
          friction changes sign with the rotation, a sensor offset does not"
+    } else if pair(ViscousFriction, DragExponent) {
+        "a pattern that reaches low speeds (`propid drive --pattern steps --lo 0.02 --hi 0.9`): \
+         a viscous torque ∝ ω dominates there, a drag ∝ ω^p does not"
     } else if a == BrakingTorque || b == BrakingTorque {
         "`propid drive --pattern steps`: held speeds, then sudden slowing, where only braking acts"
     } else {

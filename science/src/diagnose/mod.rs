@@ -279,6 +279,10 @@ pub struct Traces {
 /// and c2; an RC oscillator's 0.3–2 % is not).
 pub const MIN_TIME_BASE: f64 = 1e-3;
 
+/// Largest device-clock rate error taken for a clock (an RC oscillator is off by 2 % at most);
+/// beyond it the time columns disagree on units.
+pub const MAX_TIME_BASE: f64 = 0.05;
+
 /// The device clock's rate against the host's: the slope of `t` on `ts_local`, minus 1, and its
 /// standard error. `None` without host times on (nearly) every row.
 fn time_base(rows: &[Row]) -> Option<(f64, f64)> {
@@ -318,7 +322,11 @@ fn time_base(rows: &[Row]) -> Option<(f64, f64)> {
 /// converted to host seconds before the diagnosis.
 pub fn diagnose_rows(rows: &[Row], options: Options) -> Result<Report, InputError> {
     let mut samples: Vec<Sample> = rows.iter().map(|r| r.sample).collect();
-    let clock = time_base(rows).filter(|(e, se)| e.abs() >= MIN_TIME_BASE && e.abs() > 10.0 * se);
+    // Beyond MAX_TIME_BASE it is not a clock but a unit (t in ms against ts_local in s): left
+    // to the gate.
+    let clock = time_base(rows).filter(|(e, se)| {
+        e.abs() >= MIN_TIME_BASE && e.abs() <= MAX_TIME_BASE && e.abs() > 10.0 * se
+    });
     if let Some((eps, _)) = clock {
         let r = 1.0 + eps;
         for s in &mut samples {
