@@ -88,7 +88,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
     );
     match &r.unexplained {
         Some(u) => s += &format!("   Unexplained: {}\n", u.description),
-        None => s += "   Unexplained: nothing (no periodic structure left in the residual)\n",
+        None => s += "   Unexplained periodic structure: none left in the residual\n",
     }
     if let Some(c) = &r.concentration {
         let at = if c.condition == "time_window" {
