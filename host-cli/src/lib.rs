@@ -48,9 +48,18 @@ pub fn exit_status_for(err: &anyhow::Error) -> u8 {
     {
         return EXIT_CANNOT_JUDGE;
     }
+    use propid_io::candump::ReplayError;
+    use propid_science::fit::FitError;
+    // The libraries' error enums wrap bad input transparently (their `source()` is the inner
+    // error's source), so look at the enums themselves too.
     let bad_input = err.chain().any(|e| {
         e.downcast_ref::<InputError>().is_some()
             || e.downcast_ref::<propid_io::tsv::TsvError>().is_some()
+            || matches!(
+                e.downcast_ref::<FitError>(),
+                Some(FitError::Input(_) | FitError::Tsv(_))
+            )
+            || matches!(e.downcast_ref::<ReplayError>(), Some(ReplayError::Input(_)))
     });
     if bad_input {
         2

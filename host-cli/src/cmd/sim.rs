@@ -104,9 +104,12 @@ pub struct Args {
     /// Init phase at the high setpoint [s].
     #[arg(long, default_value_t = 5.0)]
     pub init_duration: f64,
-    /// Pattern after the init phase.
+    /// Pattern after the init phase: sine, steps, chirp, square, prbs, multisine.
     #[arg(long, default_value_t = Pattern::Sine)]
     pub pattern: Pattern,
+    /// Play a pattern file from `propid plan` instead (its range, period and durations).
+    #[arg(long, conflicts_with_all = ["pattern", "lo", "hi", "period", "duration", "init_duration"])]
+    pub pattern_file: Option<PathBuf>,
     /// Which simulator: `formula` (effects as the diagnosis's own formulas) or `mechanism`
     /// (effects from a current loop, observer, load cell, bearings, clock: propid-mechsim).
     #[arg(long = "stand", value_enum, default_value_t = StandKind::Formula)]
@@ -277,17 +280,28 @@ impl StandArgs {
 }
 
 impl Args {
-    /// The excitation these arguments describe.
-    pub fn excitation(&self) -> Excitation {
-        Excitation {
+    /// The excitation these arguments describe (a pattern file's, when given).
+    pub fn excitation(&self) -> Result<Excitation, InputError> {
+        if let Some(path) = &self.pattern_file {
+            return read_pattern_file(path);
+        }
+        Ok(Excitation {
             lo: self.lo,
             hi: self.hi,
             period: self.period,
             duration: self.duration,
             init_duration: self.init_duration,
             pattern: self.pattern,
-        }
+        })
     }
+}
+
+/// Reads a pattern file written by `propid plan`.
+pub fn read_pattern_file(path: &std::path::Path) -> Result<Excitation, InputError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError(format!("{name}: cannot read: {e}")))?;
+    propid_science::plan::excitation_from_file(&text, &name)
 }
 
 /// The defaults of [`MechArgs`], as clap gives them.
@@ -529,7 +543,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
 
 fn run_mechanism(args: &Args, out: Box<dyn Write>) -> anyhow::Result<()> {
     let config = mech_config(&args.stand, &args.mech)?;
-    let excitation = args.excitation();
+    let excitation = args.excitation()?;
     excitation.validate()?;
     let run = Run {
         init_setpoint: excitation.hi,
@@ -584,7 +598,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         return run_mechanism(&args, out);
     }
     let config = args.stand.config()?;
-    let excitation = args.excitation();
+    let excitation = args.excitation()?;
     excitation.validate()?;
     let out: Box<dyn Write> = match &args.output {
         Some(p) => Box::new(std::io::BufWriter::new(
