@@ -24,8 +24,30 @@ pub mod signals;
 
 pub use propid_io::InputError;
 
-/// The exit status for an error: 2 for bad input, 1 otherwise.
+/// The data cannot support a verdict (`propid diagnose`): exit status 3, distinct from bad input.
+#[derive(Debug)]
+pub struct CannotJudge(pub String);
+
+impl std::fmt::Display for CannotJudge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for CannotJudge {}
+
+/// Exit status of `propid diagnose` when the data cannot support a verdict.
+pub const EXIT_CANNOT_JUDGE: u8 = 3;
+
+/// The exit status for an error: 3 when the data cannot support a verdict, 2 for bad input,
+/// 1 otherwise.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
+    if err
+        .chain()
+        .any(|e| e.downcast_ref::<CannotJudge>().is_some())
+    {
+        return EXIT_CANNOT_JUDGE;
+    }
     use propid_io::candump::ReplayError;
     use propid_science::fit::FitError;
     // The libraries' error enums wrap bad input transparently (their `source()` is the inner

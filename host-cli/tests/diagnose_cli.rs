@@ -102,18 +102,118 @@ fn clean_data_says_nothing_is_wrong() {
 #[test]
 fn bad_input_exits_2() {
     let dir = tempfile::tempdir().unwrap();
-    let short = dir.path().join("short.tsv");
-    std::fs::write(&short, "t\tforce\tvelocity\tacceleration\n0\t1\t2\t3\n").unwrap();
-    let out = propid(&["diagnose", short.to_str().unwrap()], None);
+    let back = dir.path().join("back.tsv");
+    let mut text = String::from("t\tforce\tvelocity\tacceleration\n");
+    for k in 0..600 {
+        let t = if k == 300 { 0.0 } else { k as f64 * 0.002 };
+        text += &format!("{t}\t0.01\t100\t0\n");
+    }
+    std::fs::write(&back, text).unwrap();
+    let out = propid(&["diagnose", back.to_str().unwrap()], None);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("short.tsv") && err.contains("at least 200"),
+        err.contains("back.tsv") && err.contains("time goes backwards"),
         "{err}"
     );
     let out = propid(&["sim", "--lo", "0.9", "--hi", "0.1"], None);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("lo < hi"));
+}
+
+/// A clean simulated recording, each row's columns as numbers (ts_local, t, force, velocity,
+/// acceleration, position).
+fn clean_rows(dir: &std::path::Path) -> (String, Vec<Vec<f64>>) {
+    let tsv = dir.join("clean.tsv");
+    let out = propid(
+        &[
+            "sim",
+            "--pattern",
+            "chirp",
+            "--duration",
+            "20",
+            "--seed",
+            "4",
+            "-o",
+            tsv.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&tsv).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let rows = lines
+        .map(|l| l.split('\t').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+fn write_rows(path: &std::path::Path, header: &str, rows: &[Vec<f64>]) {
+    let mut text = header.to_string() + "\n";
+    for r in rows {
+        let cols: Vec<String> = r.iter().map(|x| format!("{x:e}")).collect();
+        text += &(cols.join("\t") + "\n");
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+/// Garbage in: each case gets "cannot judge: <why>", exit status 3, never a verdict.
+#[test]
+fn garbage_cannot_be_judged_exit_3() {
+    let dir = tempfile::tempdir().unwrap();
+    let (header, rows) = clean_rows(dir.path());
+    assert_eq!(
+        header,
+        "ts_local\tt\tforce\tvelocity\tacceleration\tposition"
+    );
+    type Spoil = fn(&mut Vec<Vec<f64>>);
+    let cases: [(&str, Spoil, &str); 4] = [
+        (
+            "zero_force",
+            |r| r.iter_mut().for_each(|x| x[2] = 0.0),
+            "force is zero",
+        ),
+        ("absurd", |r| r[1000][3] = 1e300, "velocity = 1e300"),
+        (
+            "milliseconds",
+            |r| r.iter_mut().for_each(|x| x[1] *= 1000.0),
+            "is the time column in seconds",
+        ),
+        (
+            "short",
+            |r| r.truncate(150),
+            "the effects tested need at least",
+        ),
+    ];
+    for (name, spoil, why) in cases {
+        let mut r = rows.clone();
+        spoil(&mut r);
+        let path = dir.path().join(format!("{name}.tsv"));
+        write_rows(&path, &header, &r);
+        let out = propid(&["diagnose", path.to_str().unwrap()], None);
+        let text = String::from_utf8_lossy(&out.stdout);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(3), "{name}: {text}{err}");
+        assert!(
+            text.contains("cannot judge: ") && text.contains(why),
+            "{name}: {text}"
+        );
+        assert!(!text.contains("Nothing is wrong"), "{name}: {text}");
+        assert!(
+            err.contains(&format!("{name}.tsv: cannot judge")),
+            "{name}: {err}"
+        );
+        let out = propid(
+            &["diagnose", path.to_str().unwrap(), "--format", "json"],
+            None,
+        );
+        assert_eq!(out.status.code(), Some(3));
+        let j: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(j["verdict"]["kind"], "cannot_judge", "{name}");
+    }
+    let out = propid(&["diagnose", "--help"], None);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("3 cannot judge"));
 }
 
 #[test]

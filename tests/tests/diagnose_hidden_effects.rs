@@ -8,12 +8,13 @@
 //! friction from a torque lag of ~20 ms (see docs/SCIENCE.md), and steps smear the acceleration
 //! estimate's derivative, so an acceleration lag looks like a torque lag there.
 //!
-//! Tolerances: 5 % on friction, ripple and the torque lag, 1 % on the drag exponent, 20 % on the
-//! force-sensor and acceleration lags: those two are read from a derivative of a noisy signal
-//! (Ḟ, ȧ), and noise in a regressor biases its coefficient towards zero (errors in variables):
-//! the estimates come out 4–16 % short.
+//! Tolerances: 5 % on friction, ripple and the torque lag, 1 % on the drag exponent, 10 % on the
+//! force-sensor and acceleration lags. Those two are read from a derivative of a noisy signal
+//! (Ḟ, ȧ); least squares would bias them towards zero (errors in variables: 4–16 % short here,
+//! 50 % on other data), so diagnose estimates them with instrumental variables and corrects the
+//! half-sample shift of a lag whose input is held between samples (docs/SCIENCE.md, "Lags").
 
-use propid_science::diagnose::{diagnose, Options, Report};
+use propid_science::diagnose::{diagnose, Options, Report, Verdict};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::{simulate, StandConfig};
 use rand::rngs::StdRng;
@@ -59,7 +60,9 @@ fn describe(r: &Report) -> String {
         .map(|e| format!("{}={:.4e}", e.name, e.value))
         .collect();
     format!(
-        "named [{}], J {:.4e}, c2 {:.4e}, simulation {:.2} → {:.2} rad/s, unexplained {:?}",
+        "{:?} {:?} named [{}], J {:.4e}, c2 {:.4e}, simulation {:.2} → {:.2} rad/s, unexplained {:?}",
+        r.verdict,
+        r.ambiguity.as_ref().map(|a| (a.between, a.values)),
         effects.join(", "),
         r.extended.mass,
         r.extended.c2,
@@ -116,11 +119,11 @@ fn every_hidden_effect_is_found_named_and_measured() {
                 }
                 "force_sensor_lag" => {
                     c.force_sensor_lag = rng.random_range(0.005..0.020);
-                    (c.force_sensor_lag, 0.20)
+                    (c.force_sensor_lag, 0.10)
                 }
                 "acceleration_lag" => {
                     c.acceleration_lag = rng.random_range(0.005..0.020);
-                    (c.acceleration_lag, 0.20)
+                    (c.acceleration_lag, 0.10)
                 }
                 _ => {
                     c.ripple = rng.random_range(0.002..0.006);
@@ -147,6 +150,29 @@ fn every_hidden_effect_is_found_named_and_measured() {
             describe(&r)
         ));
         let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+        // A rotor that never reverses (lo > 0) cannot tell a Coulomb friction from a force-sensor
+        // offset: both are a constant torque; and a small viscous term over a narrow speed range
+        // looks like a drag exponent slightly below 2. When the held-out evidence cannot separate
+        // two candidates the honest answer is "ambiguous", with both; it passes only with the
+        // right one among them, its estimate within the tolerance.
+        if let Some(a) = &r.ambiguity {
+            match a.between.iter().position(|n| *n == case.name) {
+                Some(k) if r.verdict == Verdict::Ambiguous && names.is_empty() => {
+                    if ((a.values[k] - case.truth) / case.truth).abs() > case.tolerance {
+                        failures.push(format!("{}: value {:.4e}", case.name, a.values[k]));
+                    }
+                }
+                _ => failures.push(format!("{}: ambiguous {:?}", case.name, a.between)),
+            }
+            continue;
+        }
+        if case.name == "coulomb_friction" {
+            failures.push(format!(
+                "{}: not ambiguous with force_offset on a rotor that never reverses: {names:?}",
+                case.name
+            ));
+            continue;
+        }
         if names != [case.name] {
             failures.push(format!("{}: named {names:?}", case.name));
             continue;
@@ -196,6 +222,7 @@ fn clean_data_names_nothing() {
             ));
             assert!(r.effects.is_empty(), "false alarm: {}", describe(&r));
             assert!(r.unexplained.is_none(), "false alarm: {}", describe(&r));
+            assert_eq!(r.verdict, Verdict::NothingWrong, "{}", describe(&r));
             assert!((r.base.mass / c.inertia - 1.0).abs() < 0.02);
         }
     }

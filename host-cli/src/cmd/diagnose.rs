@@ -3,9 +3,11 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text, Options};
+use propid_science::diagnose::{
+    diagnose_rows, read_rows, report_figure, to_text, Options, Verdict,
+};
 
-use crate::InputError;
+use crate::{CannotJudge, InputError};
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -18,6 +20,12 @@ pub enum Format {
 
 /// Arguments of `propid diagnose`.
 #[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Exit status: 0 a verdict (nothing wrong, effects named, or structure left \
+unexplained); 2 bad input (unreadable file, time going backwards); 3 cannot judge: the data cannot \
+support a verdict (all-zero force, an absurd value such as 1e300, time not in seconds, no excitation, \
+too few samples, non-finite fitted parameters); the report says why; 1 any other error."
+)]
 pub struct Args {
     /// The recording (canonical TSV; `-` for standard input).
     pub file: PathBuf,
@@ -34,9 +42,9 @@ pub struct Args {
 
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (samples, skipped) = read_samples(&args.file)?;
-    let mut report = diagnose(
-        &samples,
+    let (rows, skipped) = read_rows(&args.file)?;
+    let mut report = diagnose_rows(
+        &rows,
         Options {
             max_effects: args.max_effects,
         },
@@ -47,7 +55,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .notes
             .push(format!("{skipped} rows with missing values were skipped"));
     }
-    if let Some(path) = &args.plot {
+    let cannot_judge = match &report.verdict {
+        Verdict::CannotJudge { reasons } => Some(
+            reasons
+                .iter()
+                .map(|w| w.to_string())
+                .collect::<Vec<_>>()
+                .join("; "),
+        ),
+        _ => None,
+    };
+    if let Some(path) = args.plot.as_ref().filter(|_| cannot_judge.is_none()) {
         crate::plot::write(path, &report_figure(&report))
             .with_context(|| format!("writing the plot {}", path.display()))?;
         eprintln!("plots written to {}", path.display());
@@ -58,5 +76,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     use std::io::Write;
     std::io::stdout().write_all(text.as_bytes())?;
-    Ok(())
+    match cannot_judge {
+        Some(why) => {
+            Err(CannotJudge(format!("{}: cannot judge: {why}", args.file.display())).into())
+        }
+        None => Ok(()),
+    }
 }

@@ -18,8 +18,9 @@ use propid_core::estimate::NormalEquations;
 
 use super::signals::{correlation, Signals};
 use super::{
-    BaseModel, CandidateScore, NamedEffect, Options, Report, ResidualAnalysis, SimulationRms,
-    Traces, Unexplained, FOLDS, HOLDOUT, MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
+    Ambiguity, BaseModel, CandidateScore, Concentration, NamedEffect, Options, Report,
+    ResidualAnalysis, SimulationRms, Traces, Unexplained, Verdict, CONCENTRATED, FOLDS, HOLDOUT,
+    MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
 use propid_io::InputError;
 
@@ -40,14 +41,23 @@ pub enum EffectKind {
     AccelerationLag,
     /// Torque periodic in rotor position [N·m].
     TorqueRipple,
+    /// The reported force reads this much when the true torque is zero [N·m].
+    ForceOffset,
+    /// A torque braking the rotor while it slows, missing from the reported force [N·m].
+    BrakingTorque,
+    /// The device clock runs at 1 + ε host seconds per second (not a regression term: measured
+    /// from `t` against `ts_local`) [–].
+    TimeBase,
     /// A torque periodic in time (not a named effect: the "unexplained" probe) [N·m].
     PeriodicDisturbance,
 }
 
 impl EffectKind {
     /// The named candidates, in the order they are tried.
-    pub const CANDIDATES: [EffectKind; 7] = [
+    pub const CANDIDATES: [EffectKind; 9] = [
         EffectKind::CoulombFriction,
+        EffectKind::ForceOffset,
+        EffectKind::BrakingTorque,
         EffectKind::ViscousFriction,
         EffectKind::DragExponent,
         EffectKind::TorqueLag,
@@ -67,6 +77,9 @@ impl EffectKind {
             EffectKind::AccelerationLag => "acceleration_lag",
             EffectKind::TorqueRipple => "torque_ripple",
             EffectKind::PeriodicDisturbance => "periodic_disturbance",
+            EffectKind::ForceOffset => "force_offset",
+            EffectKind::BrakingTorque => "braking_torque",
+            EffectKind::TimeBase => "time_base",
         }
     }
 
@@ -75,17 +88,36 @@ impl EffectKind {
         match self {
             EffectKind::CoulombFriction
             | EffectKind::TorqueRipple
-            | EffectKind::PeriodicDisturbance => "N·m",
+            | EffectKind::PeriodicDisturbance
+            | EffectKind::ForceOffset
+            | EffectKind::BrakingTorque => "N·m",
             EffectKind::ViscousFriction => "N·m·s/rad",
-            EffectKind::DragExponent => "1",
+            EffectKind::DragExponent | EffectKind::TimeBase => "1",
             EffectKind::TorqueLag | EffectKind::ForceSensorLag | EffectKind::AccelerationLag => "s",
         }
+    }
+
+    /// Whether its parameter is a lag (the three lags look alike in the acceleration equation).
+    pub fn is_lag(self) -> bool {
+        matches!(
+            self,
+            EffectKind::TorqueLag | EffectKind::ForceSensorLag | EffectKind::AccelerationLag
+        )
+    }
+
+    /// Whether its regressor is a derivative of a measured, noisy signal (Ḟ, ȧ): such a column
+    /// is estimated with an instrument (see [`Stats`]), not by least squares.
+    fn differentiated(self) -> bool {
+        matches!(
+            self,
+            EffectKind::ForceSensorLag | EffectKind::AccelerationLag
+        )
     }
 
     /// Regression columns it adds.
     fn columns(self) -> usize {
         match self {
-            EffectKind::DragExponent | EffectKind::TorqueLag => 0,
+            EffectKind::DragExponent | EffectKind::TorqueLag | EffectKind::TimeBase => 0,
             EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => 2,
             _ => 1,
         }
@@ -104,10 +136,50 @@ pub struct Effect {
 
 const MAX_COLUMNS: usize = 10;
 
+/// The number of regression columns of a model, as a type the compiler checks: every width a
+/// model can have is a variant, so dispatching to the const-generic accumulators is an
+/// exhaustive match, and a model too wide for them cannot be built ([`Model::with`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+enum Width {
+    #[default]
+    W2,
+    W3,
+    W4,
+    W5,
+    W6,
+    W7,
+    W8,
+    W9,
+    W10,
+}
+
+impl Width {
+    fn of(columns: usize) -> Option<Width> {
+        Some(match columns {
+            2 => Width::W2,
+            3 => Width::W3,
+            4 => Width::W4,
+            5 => Width::W5,
+            6 => Width::W6,
+            7 => Width::W7,
+            8 => Width::W8,
+            9 => Width::W9,
+            10 => Width::W10,
+            _ => return None,
+        })
+    }
+}
+
+/// The widest model a diagnosis naming up to `max_effects` effects can try (in columns).
+pub(super) fn widest(max_effects: usize) -> usize {
+    (2 + 2 * max_effects).min(MAX_COLUMNS)
+}
+
 /// A model: the base plus some effects.
 #[derive(Clone, Debug, Default)]
 struct Model {
     effects: Vec<Effect>,
+    width: Width,
 }
 
 /// Per-model precomputation: the torque input F̃ and the drag exponent.
@@ -117,10 +189,16 @@ struct Prepared {
 }
 
 impl Model {
-    fn with(&self, e: Effect) -> Model {
+    /// The model plus `e`; `None` when it would need more than [`MAX_COLUMNS`] columns.
+    fn with(&self, e: Effect) -> Option<Model> {
         let mut m = self.clone();
         m.effects.push(e);
-        m
+        m.width = Width::of(m.columns())?;
+        Some(m)
+    }
+
+    fn differentiated(&self) -> bool {
+        self.effects.iter().any(|e| e.kind.differentiated())
     }
 
     fn has(&self, kind: EffectKind) -> bool {
@@ -148,6 +226,26 @@ impl Model {
                 .find(|e| e.kind == EffectKind::DragExponent)
                 .map_or(2.0, |e| e.param),
         }
+    }
+
+    /// The instruments at sample `i`: the regression row `row` with each differentiated column
+    /// replaced by its instrument (see [`Stats`]).
+    fn instruments(
+        &self,
+        s: &Signals,
+        i: usize,
+        mut row: [f64; MAX_COLUMNS],
+    ) -> [f64; MAX_COLUMNS] {
+        let mut c = 2;
+        for e in &self.effects {
+            match e.kind {
+                EffectKind::ForceSensorLag => row[c] = s.force_rate_instrument[i],
+                EffectKind::AccelerationLag => row[c] = -s.jerk_instrument[i],
+                _ => {}
+            }
+            c += e.kind.columns();
+        }
+        row
     }
 
     /// The regression row at sample `i` for velocity `omega`. With `dynamics_only`, terms that
@@ -182,6 +280,8 @@ impl Model {
         for e in &self.effects {
             match e.kind {
                 EffectKind::CoulombFriction => r[c] = -sgn,
+                EffectKind::ForceOffset => r[c] = -1.0,
+                EffectKind::BrakingTorque => r[c] = if s.decelerating[i] { -sgn } else { 0.0 },
                 EffectKind::ViscousFriction => r[c] = -omega,
                 EffectKind::ForceSensorLag => r[c] = s.force_rate[i],
                 EffectKind::AccelerationLag => r[c] = if dynamics_only { 0.0 } else { -s.jerk[i] },
@@ -201,7 +301,7 @@ impl Model {
                     r[c] = x.sin();
                     r[c + 1] = x.cos();
                 }
-                EffectKind::DragExponent | EffectKind::TorqueLag => {}
+                EffectKind::DragExponent | EffectKind::TorqueLag | EffectKind::TimeBase => {}
             }
             c += e.kind.columns();
         }
@@ -227,20 +327,158 @@ struct Cv {
     folds: [f64; FOLDS],
 }
 
+/// Sufficient statistics of one block of samples: the normal equations (ΦᵀΦ, Φᵀy, yᵀy: the
+/// residual of any θ on the block) and, for a model with a differentiated regressor, the
+/// instrumental-variable moments ZᵀΦ, Zᵀy, ZᵀZ. Blocks merge by addition, so a fold's training
+/// set is the sum of the other folds' statistics.
+///
+/// Why instruments: Ḟ and ȧ are slopes of noisy samples, and noise in a regressor biases its
+/// least-squares coefficient towards zero by var(noise)/var(regressor) (errors in variables).
+/// The instrument of Ḟ at sample i is (F[i+h+1] − F[i−h−1]) / (t[i+h+1] − t[i−h−1]) (h: the
+/// slope's half-window): it shares no sample with the slope at i, so its noise is independent
+/// of the regressor's and of the equation error, while it sees the same change (smooth or a
+/// step). Then θ = (ZᵀΦ)⁻¹Zᵀy has no noise bias at all, whatever the noise level. Every other
+/// column is its own instrument.
+#[derive(Clone, Copy, Debug)]
+struct Stats<const N: usize> {
+    ne: NormalEquations<f64, N>,
+    iv: Option<Moments<N>>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Moments<const N: usize> {
+    zx: [[f64; N]; N],
+    zy: [f64; N],
+    zz: [[f64; N]; N],
+}
+
+impl<const N: usize> Stats<N> {
+    fn new(iv: bool) -> Self {
+        Stats {
+            ne: NormalEquations::new(),
+            iv: iv.then_some(Moments {
+                zx: [[0.0; N]; N],
+                zy: [0.0; N],
+                zz: [[0.0; N]; N],
+            }),
+        }
+    }
+
+    fn update(&mut self, phi: &[f64; N], z: &[f64; N], y: f64) {
+        self.ne.update(phi, y);
+        if let Some(m) = &mut self.iv {
+            for r in 0..N {
+                m.zy[r] += z[r] * y;
+                for c in 0..N {
+                    m.zx[r][c] += z[r] * phi[c];
+                    m.zz[r][c] += z[r] * z[c];
+                }
+            }
+        }
+    }
+
+    fn merge(&mut self, other: &Self) {
+        self.ne.merge(&other.ne);
+        if let (Some(a), Some(b)) = (&mut self.iv, &other.iv) {
+            for r in 0..N {
+                a.zy[r] += b.zy[r];
+                for c in 0..N {
+                    a.zx[r][c] += b.zx[r][c];
+                    a.zz[r][c] += b.zz[r][c];
+                }
+            }
+        }
+    }
+
+    /// θ and its standard errors: least squares, or the instrumental-variable estimate with
+    /// its covariance σ²·(ZᵀΦ)⁻¹ZᵀZ(ZᵀΦ)⁻ᵀ.
+    fn solve(&self) -> Option<([f64; N], [f64; N])> {
+        let Some(m) = &self.iv else {
+            let sol = self.ne.solve().ok()?;
+            return Some((sol.theta, sol.stderr));
+        };
+        let xx = self.ne.matrix();
+        let dx: [f64; N] = core::array::from_fn(|c| 1.0 / xx[c][c].max(f64::MIN_POSITIVE).sqrt());
+        let dz: [f64; N] = core::array::from_fn(|r| 1.0 / m.zz[r][r].max(f64::MIN_POSITIVE).sqrt());
+        let a: [[f64; N]; N] =
+            core::array::from_fn(|r| core::array::from_fn(|c| m.zx[r][c] * dz[r] * dx[c]));
+        // (ZᵀΦ)⁻¹ of the scaled system, column by column.
+        let inv: [[f64; N]; N] = {
+            let cols: [[f64; N]; N] = core::array::from_fn(|k| {
+                let e: [f64; N] = core::array::from_fn(|r| if r == k { 1.0 } else { 0.0 });
+                gauss(a, e).unwrap_or([f64::NAN; N])
+            });
+            core::array::from_fn(|r| core::array::from_fn(|c| cols[c][r]))
+        };
+        let u: [f64; N] =
+            core::array::from_fn(|r| (0..N).map(|c| inv[r][c] * m.zy[c] * dz[c]).sum());
+        let theta: [f64; N] = core::array::from_fn(|c| u[c] * dx[c]);
+        if theta.iter().any(|t| !t.is_finite()) {
+            return None;
+        }
+        let n = self.ne.count();
+        let sigma2 = self.ne.residual_sum_of_squares(&theta) / (n - N as f64).max(1.0);
+        // cov(u) = σ²·A⁻¹·(D_z ZᵀZ D_z)·A⁻ᵀ; only the diagonal is needed.
+        let stderr: [f64; N] = core::array::from_fn(|k| {
+            let mut v = 0.0;
+            for r in 0..N {
+                for c in 0..N {
+                    v += inv[k][r] * m.zz[r][c] * dz[r] * dz[c] * inv[k][c];
+                }
+            }
+            (v * sigma2).max(0.0).sqrt() * dx[k]
+        });
+        Some((theta, stderr))
+    }
+}
+
+/// Solves a x = b by Gaussian elimination with partial pivoting; `None` if singular.
+fn gauss<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
+    for k in 0..N {
+        let p = (k..N).max_by(|x, y| a[*x][k].abs().total_cmp(&a[*y][k].abs()))?;
+        if a[p][k].abs() < 1e-14 {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        let pivot = a[k];
+        for r in k + 1..N {
+            let f = a[r][k] / pivot[k];
+            for (x, p) in a[r][k..].iter_mut().zip(&pivot[k..]) {
+                *x -= f * p;
+            }
+            b[r] -= f * b[k];
+        }
+    }
+    let mut x = [0.0; N];
+    for k in (0..N).rev() {
+        let sum: f64 = (k + 1..N).map(|c| a[k][c] * x[c]).sum();
+        x[k] = (b[k] - sum) / a[k][k];
+    }
+    Some(x)
+}
+
 fn accumulate<const N: usize>(
     model: &Model,
     p: &Prepared,
     s: &Signals,
     range: Range<usize>,
     folds: usize,
-) -> Vec<NormalEquations<f64, N>> {
-    let mut eqs = vec![NormalEquations::<f64, N>::new(); folds];
+    iv: bool,
+) -> Vec<Stats<N>> {
+    let mut eqs = vec![Stats::<N>::new(iv); folds];
     let len = range.len().max(1);
     for i in range.clone() {
         let row = model.row(p, s, i, s.velocity[i], false, 0.0);
         let phi: [f64; N] = core::array::from_fn(|k| row[k]);
+        let z = if iv {
+            let zr = model.instruments(s, i, row);
+            core::array::from_fn(|k| zr[k])
+        } else {
+            phi
+        };
         let fold = (i - range.start) * folds / len;
-        eqs[fold].update(&phi, s.acceleration[i]);
+        eqs[fold].update(&phi, &z, s.acceleration[i]);
     }
     eqs
 }
@@ -251,32 +489,34 @@ fn fit_n<const N: usize>(
     s: &Signals,
     range: Range<usize>,
 ) -> Option<Fit> {
-    let eq = accumulate::<N>(model, p, s, range, 1).pop()?;
-    let sol = eq.solve().ok()?;
+    let eq = accumulate::<N>(model, p, s, range, 1, model.differentiated()).pop()?;
+    let (theta, stderr) = eq.solve()?;
     Some(Fit {
-        theta: sol.theta.to_vec(),
-        stderr: sol.stderr.to_vec(),
-        rss: eq.residual_sum_of_squares(&sol.theta),
-        n: eq.count(),
+        theta: theta.to_vec(),
+        stderr: stderr.to_vec(),
+        rss: eq.ne.residual_sum_of_squares(&theta),
+        n: eq.ne.count(),
     })
 }
 
 fn cv_n<const N: usize>(model: &Model, p: &Prepared, s: &Signals) -> Option<Cv> {
-    let eqs = accumulate::<N>(model, p, s, s.first..s.len(), FOLDS);
+    // Held-out prediction is scored with least squares, the best linear predictor from the
+    // regressors as measured; the reported parameters come from `fit_n` (instruments).
+    let eqs = accumulate::<N>(model, p, s, s.first..s.len(), FOLDS, false);
     let mut folds = [0.0; FOLDS];
     let (mut total, mut count) = (0.0, 0.0);
     for k in 0..FOLDS {
-        let mut train = NormalEquations::<f64, N>::new();
+        let mut train = Stats::<N>::new(false);
         for (j, e) in eqs.iter().enumerate() {
             if j != k {
                 train.merge(e);
             }
         }
-        let theta = train.solve().ok()?.theta;
-        let rss = eqs[k].residual_sum_of_squares(&theta);
-        folds[k] = rss / eqs[k].count().max(1.0);
+        let (theta, _) = train.solve()?;
+        let rss = eqs[k].ne.residual_sum_of_squares(&theta);
+        folds[k] = rss / eqs[k].ne.count().max(1.0);
         total += rss;
-        count += eqs[k].count();
+        count += eqs[k].ne.count();
     }
     Some(Cv {
         mse: total / count.max(1.0),
@@ -284,31 +524,31 @@ fn cv_n<const N: usize>(model: &Model, p: &Prepared, s: &Signals) -> Option<Cv> 
     })
 }
 
-macro_rules! by_columns {
-    ($n:expr, $f:ident, $($arg:expr),*) => {
-        match $n {
-            2 => $f::<2>($($arg),*),
-            3 => $f::<3>($($arg),*),
-            4 => $f::<4>($($arg),*),
-            5 => $f::<5>($($arg),*),
-            6 => $f::<6>($($arg),*),
-            7 => $f::<7>($($arg),*),
-            8 => $f::<8>($($arg),*),
-            9 => $f::<9>($($arg),*),
-            10 => $f::<10>($($arg),*),
-            _ => None,
+/// Calls the const-generic `$f::<N>` for the model's width: an exhaustive match on [`Width`].
+macro_rules! by_width {
+    ($w:expr, $f:ident, $($arg:expr),*) => {
+        match $w {
+            Width::W2 => $f::<2>($($arg),*),
+            Width::W3 => $f::<3>($($arg),*),
+            Width::W4 => $f::<4>($($arg),*),
+            Width::W5 => $f::<5>($($arg),*),
+            Width::W6 => $f::<6>($($arg),*),
+            Width::W7 => $f::<7>($($arg),*),
+            Width::W8 => $f::<8>($($arg),*),
+            Width::W9 => $f::<9>($($arg),*),
+            Width::W10 => $f::<10>($($arg),*),
         }
     };
 }
 
 fn fit(model: &Model, s: &Signals, range: Range<usize>) -> Option<Fit> {
     let p = model.prepare(s);
-    by_columns!(model.columns(), fit_n, model, &p, s, range)
+    by_width!(model.width, fit_n, model, &p, s, range)
 }
 
 fn cross_validate(model: &Model, s: &Signals) -> Option<Cv> {
     let p = model.prepare(s);
-    by_columns!(model.columns(), cv_n, model, &p, s)
+    by_width!(model.width, cv_n, model, &p, s)
 }
 
 /// Open-loop simulation of the velocity over `range` from the measured inputs, starting at the
@@ -382,7 +622,10 @@ pub(super) fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iteration
 /// then a refinement between the best point's neighbours.
 fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
     let score = |x: f64| {
-        cross_validate(&model.with(Effect { kind, param: x }), s).map_or(f64::INFINITY, |c| c.mse)
+        model
+            .with(Effect { kind, param: x })
+            .and_then(|m| cross_validate(&m, s))
+            .map_or(f64::INFINITY, |c| c.mse)
     };
     let grid: Vec<f64> = match kind {
         EffectKind::DragExponent => (0..=20).map(|k| 1.2 + 0.1 * k as f64).collect(),
@@ -413,10 +656,16 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
         .sum::<usize>();
     let t0 = fit.theta[0];
     match e.kind {
-        EffectKind::CoulombFriction | EffectKind::ViscousFriction | EffectKind::ForceSensorLag => {
-            (fit.theta[col] / t0, fit.stderr[col] / t0.abs())
-        }
-        EffectKind::AccelerationLag => (fit.theta[col], fit.stderr[col]),
+        EffectKind::CoulombFriction
+        | EffectKind::ViscousFriction
+        | EffectKind::ForceOffset
+        | EffectKind::BrakingTorque => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
+        EffectKind::TimeBase => (e.param, f64::NAN),
+        EffectKind::ForceSensorLag => (
+            held_input_lag(fit.theta[col] / t0, s.rate),
+            fit.stderr[col] / t0.abs(),
+        ),
+        EffectKind::AccelerationLag => (held_input_lag(fit.theta[col], s.rate), fit.stderr[col]),
         EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => {
             let (a, b) = (fit.theta[col], fit.theta[col + 1]);
             let amp = (a * a + b * b).sqrt();
@@ -445,6 +694,21 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
     }
 }
 
+/// The time constant L of a first-order lag from the coefficient c of the derivative that
+/// inverts it, for an input held between samples (a drive's torque follows a setpoint that changes
+/// once per sample, so the sensor sees a staircase). The exact inverse of the sampled lag,
+/// x_k = y_k + (1/α − 1)(y_k − y_{k−1}) with α = 1 − e^{−Δt/L}, has 1/α − 1 = L/Δt − ½ + Δt/(12L) + …,
+/// so c = L − Δt/2 + Δt²/(12L): the derivative's coefficient is short by half a sample. (Read
+/// as L it would be 17 % short for a 12 ms lag at 250 Hz.)
+fn held_input_lag(c: f64, rate: f64) -> f64 {
+    let dt = 1.0 / rate;
+    let l0 = c + 0.5 * dt;
+    if l0 <= 0.0 {
+        return c;
+    }
+    c + 0.5 * dt - dt * dt / (12.0 * l0)
+}
+
 fn fit_on_all(model: &Model, s: &Signals) -> Option<Fit> {
     fit(model, s, s.first..s.len())
 }
@@ -454,7 +718,10 @@ fn fit_on_all(model: &Model, s: &Signals) -> Option<Fit> {
 fn physical(kind: EffectKind, value: f64, rate: f64) -> Result<(), String> {
     let min_lag = 0.5 / rate;
     let ok = match kind {
-        EffectKind::CoulombFriction | EffectKind::ViscousFriction => value > 0.0,
+        EffectKind::CoulombFriction | EffectKind::ViscousFriction | EffectKind::BrakingTorque => {
+            value > 0.0
+        }
+        EffectKind::ForceOffset | EffectKind::TimeBase => value != 0.0 && value.is_finite(),
         EffectKind::ForceSensorLag | EffectKind::AccelerationLag | EffectKind::TorqueLag => {
             if value > 0.0 && value <= min_lag {
                 return Err(format!(
@@ -475,7 +742,7 @@ fn physical(kind: EffectKind, value: f64, rate: f64) -> Result<(), String> {
     }
 }
 
-fn explanation(kind: EffectKind, value: f64) -> String {
+pub(super) fn explanation(kind: EffectKind, value: f64) -> String {
     match kind {
         EffectKind::CoulombFriction => format!("a constant torque of {value:.3e} N·m opposes rotation (bearing or cogging friction, or a torque-estimate offset)"),
         EffectKind::ViscousFriction => format!("a torque of {value:.3e} N·m per rad/s opposes rotation (viscous friction; the seed's c1, which its defaults force to zero)"),
@@ -485,6 +752,9 @@ fn explanation(kind: EffectKind, value: f64) -> String {
         EffectKind::AccelerationLag => format!("the reported acceleration lags the true one by {:.1} ms (the drive's estimator filter)", value * 1e3),
         EffectKind::TorqueRipple => format!("a torque ripple of {value:.3e} N·m periodic in rotor angle"),
         EffectKind::PeriodicDisturbance => format!("a torque of {value:.3e} N·m periodic in time"),
+        EffectKind::ForceOffset => format!("the reported force reads {value:+.3e} N·m when no torque acts (a current-sense or load-cell zero offset)"),
+        EffectKind::BrakingTorque => format!("while the rotor slows, a torque of {value:.3e} N·m brakes it that the reported force does not show (active or regenerative braking the current sense misses)"),
+        EffectKind::TimeBase => format!("the device clock runs {:+.3} % fast against the host's (an RC oscillator): velocity and acceleration are per device second; corrected before the fit", value * 100.0),
     }
 }
 
@@ -564,6 +834,91 @@ fn residuals(model: &Model, fit: &Fit, s: &Signals) -> Vec<f64> {
         .collect()
 }
 
+/// Where the squared residual `r` over `test` (the held-out part, predicted by a model fitted
+/// before it) concentrates: the condition (decelerating, lowest or highest third of the speeds)
+/// or the tenth of the time that holds the largest share of it, if that share is at least
+/// [`CONCENTRATED`] and twice the condition's share of the samples.
+fn concentration(s: &Signals, r: &[f64], test: Range<usize>) -> Option<Concentration> {
+    let n = test.len();
+    if n < 100 {
+        return None;
+    }
+    let total: f64 = test.clone().map(|i| r[i] * r[i]).sum();
+    if total <= 0.0 {
+        return None;
+    }
+    let mut speeds: Vec<f64> = test.clone().map(|i| s.velocity[i].abs()).collect();
+    speeds.sort_by(f64::total_cmp);
+    let (low, high) = (speeds[n / 3], speeds[2 * n / 3]);
+    let (t0, t1) = (s.t[test.start], s.t[test.end - 1]);
+    let share = |inside: &dyn Fn(usize) -> bool| {
+        let (mut e, mut k) = (0.0, 0usize);
+        for i in test.clone() {
+            if inside(i) {
+                e += r[i] * r[i];
+                k += 1;
+            }
+        }
+        (e / total, k as f64 / n as f64)
+    };
+    let mut found: Vec<Concentration> = Vec::new();
+    let conditions: [(&'static str, &dyn Fn(usize) -> bool); 3] = [
+        ("decelerating", &|i| s.decelerating[i]),
+        ("low_speed", &|i| s.velocity[i].abs() < low),
+        ("high_speed", &|i| s.velocity[i].abs() > high),
+    ];
+    for (name, inside) in conditions {
+        let (e, k) = share(inside);
+        found.push(Concentration {
+            condition: name,
+            error_percent: 100.0 * e,
+            samples_percent: 100.0 * k,
+            from_s: t0,
+            to_s: t1,
+        });
+    }
+    for w in 0..10 {
+        let (a, b) = (test.start + w * n / 10, test.start + (w + 1) * n / 10);
+        let (e, k) = share(&|i| (a..b).contains(&i));
+        found.push(Concentration {
+            condition: "time_window",
+            error_percent: 100.0 * e,
+            samples_percent: 100.0 * k,
+            from_s: s.t[a],
+            to_s: s.t[b - 1],
+        });
+    }
+    found
+        .into_iter()
+        .filter(|c| {
+            c.error_percent >= 100.0 * CONCENTRATED && c.error_percent >= 2.0 * c.samples_percent
+        })
+        .max_by(|a, b| {
+            (a.error_percent / a.samples_percent).total_cmp(&(b.error_percent / b.samples_percent))
+        })
+}
+
+/// Relative distance of held-out gains within which two candidates are "about equally good".
+pub const AMBIGUOUS: f64 = 0.02;
+
+/// The `propid drive` pattern that tells `a` from `b`.
+fn separating_pattern(a: EffectKind, b: EffectKind) -> &'static str {
+    use EffectKind::*;
+    let pair = |x: EffectKind, y: EffectKind| (a == x && b == y) || (a == y && b == x);
+    if pair(CoulombFriction, ForceOffset) {
+        "a pattern that reverses the rotor (`propid drive --pattern chirp --lo -0.5 --hi 0.9`): \
+         friction changes sign with the rotation, a sensor offset does not"
+    } else if pair(ViscousFriction, DragExponent) {
+        "a pattern that reaches low speeds (`propid drive --pattern steps --lo 0.02 --hi 0.9`): \
+         a viscous torque ∝ ω dominates there, a drag ∝ ω^p does not"
+    } else if a == BrakingTorque || b == BrakingTorque {
+        "`propid drive --pattern steps`: held speeds, then sudden slowing, where only braking acts"
+    } else {
+        "`propid drive --pattern chirp`: a sweep of frequencies, over which a lag's effect grows \
+         and a friction's or drag's does not"
+    }
+}
+
 fn fold_wins(a: &Cv, b: &Cv) -> usize {
     a.folds.iter().zip(&b.folds).filter(|(x, y)| x < y).count()
 }
@@ -619,7 +974,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         .filter(|(a, w)| a.abs() * 0.5 < 0.01 * w.abs())
         .count() as f64
         / n as f64;
-    if steady > 0.7 {
+    if steady > super::STEADY_SHARE {
         notes.push(format!(
             "{:.0} % of the samples are near steady state: the data speak mostly about the drag law, little about the inertia",
             steady * 100.0
@@ -645,6 +1000,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     let mut current = cross_validate(&model, s).ok_or_else(unfit)?;
     let mut candidates = Vec::new();
     let mut cv_gains = Vec::new();
+    let mut ambiguity = None;
     let signal_power =
         s.acceleration[s.first..].iter().map(|a| a * a).sum::<f64>() / (n - s.first).max(1) as f64;
     for _round in 0..options.max_effects {
@@ -654,9 +1010,11 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         }
         let mut passing: Vec<(Model, Cv, f64, usize, f64)> = Vec::new();
         for kind in EffectKind::CANDIDATES {
+            // One lag per model: the three delay the measured acceleration alike, and two of
+            // them together split one delay between them (seen on the formula-level stand: a
+            // 12 ms force-sensor lag came out as 14 ms plus a 4 ms acceleration lag).
             let excluded = model.has(kind)
-                || (kind == EffectKind::TorqueLag && model.has(EffectKind::ForceSensorLag))
-                || (kind == EffectKind::ForceSensorLag && model.has(EffectKind::TorqueLag))
+                || (kind.is_lag() && model.effects.iter().any(|e| e.kind.is_lag()))
                 || (kind == EffectKind::TorqueRipple && s.position.is_none());
             if excluded {
                 continue;
@@ -664,7 +1022,13 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             let Some(param) = tune(&model, kind, s) else {
                 continue;
             };
-            let trial = model.with(Effect { kind, param });
+            let Some(trial) = model.with(Effect { kind, param }) else {
+                notes.push(format!(
+                    "{} not tried: the model would need more than {MAX_COLUMNS} regression columns",
+                    kind.name()
+                ));
+                continue;
+            };
             let Some(cv) = cross_validate(&trial, s) else {
                 continue;
             };
@@ -696,6 +1060,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
                 }
             }
             candidates.push(CandidateScore {
+                kind,
                 name: kind.name(),
                 cv_gain_percent: gain * 100.0,
                 folds_better: wins,
@@ -713,14 +1078,14 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         // so when another lag comes within 20 % of a winning lag, the held-out velocity simulation
         // decides: only a lag of the torque delays the velocity itself.
         passing.sort_by(|a, b| b.2.total_cmp(&a.2));
-        let is_lag = |k: &str| k.ends_with("_lag");
-        if passing.len() > 1 && is_lag(candidates[passing[0].3].name) {
+        let is_lag = |i: usize| candidates[i].kind.is_lag();
+        if passing.len() > 1 && is_lag(passing[0].3) {
             let top = passing[0].2;
             let rival = passing
                 .iter()
                 .enumerate()
                 .skip(1)
-                .filter(|(_, p)| p.2 >= 0.8 * top && is_lag(candidates[p.3].name))
+                .filter(|(_, p)| p.2 >= 0.8 * top && is_lag(p.3))
                 .max_by(|a, b| a.1 .4.total_cmp(&b.1 .4))
                 .map(|(i, _)| i);
             if let Some(i) = rival {
@@ -742,8 +1107,29 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
                 }
             }
         }
-        let near = passing;
-        let best = near.into_iter().next().map(|(t, c, g, i, _)| (t, c, g, i));
+        // Two candidates of different kinds that explain the held-out data about equally well
+        // (the rival's gain within AMBIGUOUS of the winner's, and the winner better in fewer
+        // than MIN_FOLDS_BETTER folds) are not told apart by these data: say so, with both
+        // estimates, and name neither (lags among themselves were settled above).
+        if let Some(rival) = passing.iter().skip(1).find(|p| {
+            p.2 >= (1.0 - AMBIGUOUS) * passing[0].2
+                && fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER
+                && !(is_lag(p.3) && is_lag(passing[0].3))
+        }) {
+            let (a, b) = (&candidates[passing[0].3], &candidates[rival.3]);
+            ambiguity = Some(Ambiguity {
+                between: [a.name, b.name],
+                values: [a.value, b.value],
+                units: [a.kind.unit(), b.kind.unit()],
+                cv_gain_percent: [passing[0].2 * 100.0, rival.2 * 100.0],
+                separate_with: separating_pattern(a.kind, b.kind),
+            });
+            break;
+        }
+        let best = passing
+            .into_iter()
+            .next()
+            .map(|(t, c, g, i, _)| (t, c, g, i));
         let Some((trial, cv, gain, index)) = best else {
             break;
         };
@@ -762,11 +1148,13 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     let mut effects = Vec::new();
     for (i, e) in model.effects.iter().enumerate() {
         let (value, stderr) = effect_value(&model, i, &ext_fit, s);
-        let alone = base.with(*e);
-        let gain = sim_of(&alone)
+        let gain = base
+            .with(*e)
+            .and_then(|alone| sim_of(&alone))
             .map(|v| 100.0 * (1.0 - rms_error(&v, measured) / rms_base))
             .unwrap_or(f64::NAN);
         effects.push(NamedEffect {
+            kind: e.kind,
             name: e.kind.name(),
             value,
             unit: e.kind.unit(),
@@ -777,6 +1165,8 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         });
     }
     let r_ext = residuals(&model, &ext_fit, s);
+    let concentration = fit(&model, s, train.clone())
+        .and_then(|f| concentration(s, &residuals(&model, &f, s), test.clone()));
     let (f_peak, ratio) = periodogram(s, &r_ext);
     let mut unexplained = None;
     if ratio > 40.0 {
@@ -784,7 +1174,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             kind: EffectKind::PeriodicDisturbance,
             param: f_peak,
         });
-        if let Some(cv) = cross_validate(&probe, s) {
+        if let Some((probe, cv)) = probe.and_then(|p| cross_validate(&p, s).map(|cv| (p, cv))) {
             let gain = 1.0 - cv.mse / current.mse;
             if gain >= MIN_GAIN && fold_wins(&cv, &current) >= MIN_FOLDS_BETTER {
                 let f = fit_on_all(&probe, s).ok_or_else(unfit)?;
@@ -817,7 +1207,17 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         residual_base: r_base.iter().step_by(step).copied().collect(),
         residual_extended: r_ext.iter().step_by(step).copied().collect(),
     };
+    let verdict = if ambiguity.is_some() {
+        Verdict::Ambiguous
+    } else if unexplained.is_some() || concentration.is_some() {
+        Verdict::Unexplained
+    } else if effects.is_empty() {
+        Verdict::NothingWrong
+    } else {
+        Verdict::Explained
+    };
     Ok(Report {
+        verdict,
         samples: n,
         duration_s: duration,
         rate_hz: s.rate,
@@ -837,6 +1237,9 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         },
         candidates,
         steady_state: None,
+        steady_share: steady,
+        ambiguity,
+        concentration,
         notes,
         traces,
     })

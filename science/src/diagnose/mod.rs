@@ -20,6 +20,7 @@
 //! check several seeds).
 
 mod effects;
+mod gate;
 mod report;
 mod signals;
 mod steady;
@@ -29,10 +30,11 @@ pub use steady::DragLaw;
 use serde::Serialize;
 
 pub use effects::{Effect, EffectKind};
+pub use gate::CannotJudge;
 pub use report::{figure as report_figure, to_text};
 use signals::Signals;
 
-use propid_io::tsv::{Sample, TsvError, TsvReader};
+use propid_io::tsv::{Row, Sample, TsvError, TsvReader};
 use propid_io::InputError;
 
 /// Smallest relative reduction of the held-out acceleration error for an effect to be named.
@@ -47,6 +49,11 @@ pub const FOLDS: usize = 5;
 pub const MIN_FOLDS_BETTER: usize = 4;
 /// Share of the data (at the end) held out for the simulated-velocity comparison.
 pub const HOLDOUT: f64 = 0.3;
+/// Share of the held-out error a condition or time window must hold to be reported [–].
+pub const CONCENTRATED: f64 = 0.4;
+
+/// Share of near-steady samples above which the steady-state drag law is also reported.
+pub const STEADY_SHARE: f64 = 0.7;
 
 /// Options of a diagnosis.
 #[derive(Clone, Copy, Debug)]
@@ -79,6 +86,9 @@ pub struct BaseModel {
 /// A named effect with its estimated parameter.
 #[derive(Clone, Debug, Serialize)]
 pub struct NamedEffect {
+    /// Which effect (code matches on this; `name` is for people).
+    #[serde(skip)]
+    pub kind: EffectKind,
     /// Effect name (`torque_lag`, …).
     pub name: &'static str,
     /// Its parameter.
@@ -98,6 +108,9 @@ pub struct NamedEffect {
 /// How a candidate scored.
 #[derive(Clone, Debug, Serialize)]
 pub struct CandidateScore {
+    /// Which effect.
+    #[serde(skip)]
+    pub kind: EffectKind,
     /// Effect name.
     pub name: &'static str,
     /// Held-out acceleration-equation gain over the model it was tried on [%].
@@ -135,6 +148,37 @@ pub struct Unexplained {
     pub frequency_hz: f64,
 }
 
+/// Where the remaining held-out error concentrates, when it does.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Concentration {
+    /// The operating condition or time window: `decelerating`, `low_speed` (lowest third of the
+    /// held-out speeds), `high_speed` (highest third) or `time_window`.
+    pub condition: &'static str,
+    /// Share of the held-out squared acceleration error in it [%].
+    pub error_percent: f64,
+    /// Share of the held-out samples in it [%].
+    pub samples_percent: f64,
+    /// Start and end of the time window [s] (for a condition: the held-out part).
+    pub from_s: f64,
+    /// End [s].
+    pub to_s: f64,
+}
+
+/// Two candidates these data cannot tell apart.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Ambiguity {
+    /// Their names.
+    pub between: [&'static str; 2],
+    /// Their estimates.
+    pub values: [f64; 2],
+    /// Units of the estimates.
+    pub units: [&'static str; 2],
+    /// Held-out acceleration gains [%].
+    pub cv_gain_percent: [f64; 2],
+    /// The `propid drive` pattern that would separate them.
+    pub separate_with: &'static str,
+}
+
 /// Correlations of the base model's acceleration residual with candidate explanatory signals.
 #[derive(Clone, Debug, Serialize)]
 pub struct ResidualAnalysis {
@@ -146,9 +190,33 @@ pub struct ResidualAnalysis {
     pub peak_to_median: f64,
 }
 
+/// What the diagnosis concludes. Code that acts on a diagnosis matches on this, never on the
+/// wording of a note.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Verdict {
+    /// No candidate improves the held-out fit and no structure is left: the seed's model
+    /// explains these data.
+    NothingWrong,
+    /// Effects were named and no structure is left.
+    Explained,
+    /// Structure is left that no candidate explains (with or without named effects).
+    Unexplained,
+    /// Two candidates explain the held-out data about equally well; neither is named (see
+    /// [`Report::ambiguity`]).
+    Ambiguous,
+    /// The data cannot support a verdict; nothing else in the report is a conclusion.
+    CannotJudge {
+        /// Why.
+        reasons: Vec<CannotJudge>,
+    },
+}
+
 /// The diagnosis.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// The verdict.
+    pub verdict: Verdict,
     /// Samples analysed.
     pub samples: usize,
     /// Duration [s].
@@ -172,6 +240,15 @@ pub struct Report {
     /// The drag law from steady-state data, when the recording cannot identify the inertia
     /// (then `base.mass` is null and the simulation fields are null).
     pub steady_state: Option<DragLaw>,
+    /// Where the remaining held-out error of the extended model concentrates (in an operating
+    /// condition or a time window holding at least twice its share of the samples and
+    /// [`CONCENTRATED`] of the error), if it does.
+    pub concentration: Option<Concentration>,
+    /// When the verdict is ambiguous: between which two, with both estimates.
+    pub ambiguity: Option<Ambiguity>,
+    /// Share of the samples near steady state (|a|/2 < 1 % of |ω|): above
+    /// [`STEADY_SHARE`] the data speak mostly about the drag law.
+    pub steady_share: f64,
     /// Notes about the data (steady-state data, missing columns, …).
     pub notes: Vec<String>,
     /// Series for plots (not serialised).
@@ -198,22 +275,209 @@ pub struct Traces {
     pub residual_extended: Vec<f64>,
 }
 
+/// Smallest device-clock rate error named as `time_base` (a crystal's 50 ppm is invisible in J
+/// and c2; an RC oscillator's 0.3–2 % is not).
+pub const MIN_TIME_BASE: f64 = 1e-3;
+
+/// Largest device-clock rate error taken for a clock (an RC oscillator is off by 2 % at most);
+/// beyond it the time columns disagree on units.
+pub const MAX_TIME_BASE: f64 = 0.05;
+
+/// The device clock's rate against the host's: the slope of `t` on `ts_local`, minus 1, and its
+/// standard error. `None` without host times on (nearly) every row.
+fn time_base(rows: &[Row]) -> Option<(f64, f64)> {
+    let both: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.ts_local.is_finite() && r.sample.t.is_finite())
+        .map(|r| (r.ts_local, r.sample.t))
+        .collect();
+    if both.len() < 100 || both.len() * 10 < rows.len() * 9 {
+        return None;
+    }
+    let n = both.len() as f64;
+    let (mx, my) = both
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    let (mut sxx, mut sxy) = (0.0, 0.0);
+    for (x, y) in &both {
+        sxx += (x - mx) * (x - mx);
+        sxy += (x - mx) * (y - my);
+    }
+    if sxx <= 0.0 {
+        return None;
+    }
+    let slope = sxy / sxx;
+    let rss: f64 = both
+        .iter()
+        .map(|(x, y)| (y - my - slope * (x - mx)).powi(2))
+        .sum();
+    let se = (rss / (n - 2.0).max(1.0) / sxx).sqrt();
+    Some((slope - 1.0, se))
+}
+
+/// Diagnoses a recording with host receive times (`ts_local`): as [`diagnose`], and first the
+/// device clock against the host's. A clock off by ε (an RC oscillator) reports velocity and
+/// acceleration per device second, so J and c2 come out (1 + ε)² too large; when ε is at least
+/// [`MIN_TIME_BASE`] and ten standard errors, it is named `time_base` and the samples are
+/// converted to host seconds before the diagnosis.
+pub fn diagnose_rows(rows: &[Row], options: Options) -> Result<Report, InputError> {
+    let mut samples: Vec<Sample> = rows.iter().map(|r| r.sample).collect();
+    // Beyond MAX_TIME_BASE it is not a clock but a unit (t in ms against ts_local in s): left
+    // to the gate.
+    let clock = time_base(rows).filter(|(e, se)| {
+        e.abs() >= MIN_TIME_BASE && e.abs() <= MAX_TIME_BASE && e.abs() > 10.0 * se
+    });
+    if let Some((eps, _)) = clock {
+        let r = 1.0 + eps;
+        for s in &mut samples {
+            s.t /= r;
+            s.velocity *= r;
+            s.acceleration *= r * r;
+        }
+    }
+    let mut report = diagnose(&samples, options)?;
+    match clock {
+        Some((eps, se)) if !matches!(report.verdict, Verdict::CannotJudge { .. }) => {
+            report.effects.insert(
+                0,
+                NamedEffect {
+                    kind: EffectKind::TimeBase,
+                    name: EffectKind::TimeBase.name(),
+                    value: eps,
+                    unit: EffectKind::TimeBase.unit(),
+                    stderr: se,
+                    gain_percent: f64::NAN,
+                    cv_gain_percent: f64::NAN,
+                    explanation: effects::explanation(EffectKind::TimeBase, eps),
+                },
+            );
+            if report.verdict == Verdict::NothingWrong {
+                report.verdict = Verdict::Explained;
+            }
+        }
+        Some(_) => {}
+        None if rows.iter().all(|r| r.ts_local.is_nan()) => report
+            .notes
+            .push("no host time column (ts_local): time_base cannot be tested".into()),
+        None => {}
+    }
+    Ok(report)
+}
+
 /// Diagnoses a recording.
 ///
 /// Rows may lack the force (a slow load cell): dynamics are diagnosed on the rows that have it;
 /// when those cannot identify the inertia (steady plateaus), the drag law is diagnosed instead.
 pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputError> {
     let complete: Vec<Sample> = samples.iter().copied().filter(Sample::is_finite).collect();
+    let columns = effects::widest(options.max_effects);
+    let why = gate::check(&complete, columns);
+    if !why.is_empty() {
+        return Ok(Report::cannot_judge(&complete, why));
+    }
     let signals = Signals::new(&complete)?;
-    match effects::run(&signals, options) {
+    let report = match effects::run(&signals, options) {
         Ok(mut r) => {
-            r.steady_state = steady::drag_law(&signals)
-                .filter(|_| r.notes.iter().any(|n| n.contains("steady state")));
-            Ok(r)
+            r.steady_state = steady::drag_law(&signals).filter(|_| r.steady_share > STEADY_SHARE);
+            r
         }
-        Err(dynamics) => {
-            let law = steady::drag_law(&signals).ok_or(dynamics.clone())?;
-            Ok(steady_report(&signals, law, dynamics))
+        Err(dynamics) => match steady::drag_law(&signals) {
+            Some(law) => steady_report(&signals, law, dynamics),
+            None => {
+                let condition_number = gate::condition_number(&signals.force, &signals.velocity);
+                let mut r = Report::cannot_judge(
+                    &complete,
+                    vec![CannotJudge::NoExcitation { condition_number }],
+                );
+                r.notes.push(dynamics.0);
+                r
+            }
+        },
+    };
+    let mut report = report.checked(&complete);
+    if !matches!(report.verdict, Verdict::CannotJudge { .. }) {
+        report.notes.push(
+            "torque_scale cannot be tested: these data have no independent torque reference (a load cell \
+             beside the drive's estimate, or a known inertia); a torque-scale error r gives J/r and c2/r and \
+             leaves no other trace"
+                .into(),
+        );
+    }
+    Ok(report)
+}
+
+impl Report {
+    /// A report that concludes nothing, for data the gate rejects.
+    fn cannot_judge(samples: &[Sample], reasons: Vec<CannotJudge>) -> Report {
+        let nan = BaseModel {
+            mass: f64::NAN,
+            c1: f64::NAN,
+            c2: f64::NAN,
+            mass_stderr: f64::NAN,
+            c2_stderr: f64::NAN,
+        };
+        let n = samples.len();
+        let duration_s = if n > 1 {
+            samples[n - 1].t - samples[0].t
+        } else {
+            0.0
+        };
+        Report {
+            verdict: Verdict::CannotJudge { reasons },
+            samples: n,
+            duration_s,
+            rate_hz: f64::NAN,
+            base: nan.clone(),
+            effects: Vec::new(),
+            extended: nan,
+            simulation_rms: SimulationRms {
+                base: f64::NAN,
+                extended: f64::NAN,
+                gain_percent: f64::NAN,
+            },
+            unexplained: None,
+            residual_analysis: ResidualAnalysis {
+                correlations: Vec::new(),
+                dominant_frequency_hz: f64::NAN,
+                peak_to_median: f64::NAN,
+            },
+            candidates: Vec::new(),
+            steady_state: None,
+            steady_share: f64::NAN,
+            ambiguity: None,
+            concentration: None,
+            notes: Vec::new(),
+            traces: Traces::default(),
+        }
+    }
+
+    /// The gate after the fit: a verdict stands only on finite parameters and errors.
+    fn checked(self, samples: &[Sample]) -> Report {
+        if matches!(self.verdict, Verdict::CannotJudge { .. }) {
+            return self;
+        }
+        let dynamic = self.steady_state.is_none() || self.base.mass.is_finite();
+        let mut fitted: Vec<(&'static str, f64)> = vec![("c2", self.base.c2)];
+        if dynamic {
+            fitted.extend([
+                ("inertia J", self.base.mass),
+                ("extended inertia J", self.extended.mass),
+                ("extended c2", self.extended.c2),
+                ("simulated-velocity error", self.simulation_rms.base),
+                (
+                    "extended simulated-velocity error",
+                    self.simulation_rms.extended,
+                ),
+            ]);
+        }
+        fitted.extend(self.effects.iter().map(|e| (e.name, e.value)));
+        match fitted.iter().find(|(_, v)| !v.is_finite()) {
+            Some((what, _)) => {
+                let mut r = Report::cannot_judge(samples, vec![CannotJudge::NonFinite { what }]);
+                r.notes = self.notes;
+                r
+            }
+            None => self,
         }
     }
 }
@@ -222,7 +486,8 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     let mut effects = Vec::new();
     if law.selected {
         effects.push(NamedEffect {
-            name: "drag_exponent",
+            kind: EffectKind::DragExponent,
+            name: EffectKind::DragExponent.name(),
             value: law.exponent,
             unit: "1",
             stderr: law.exponent_stderr,
@@ -236,6 +501,11 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     }
     let n = s.len();
     Report {
+        verdict: if law.selected {
+            Verdict::Explained
+        } else {
+            Verdict::NothingWrong
+        },
         samples: n,
         duration_s: s.t[n - 1] - s.t[0],
         rate_hz: s.rate,
@@ -256,8 +526,36 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
             why.0, law.samples
         )],
         steady_state: Some(law),
+        steady_share: 1.0,
+        ambiguity: None,
+        concentration: None,
         traces: Traces::default(),
     }
+}
+
+/// Reads every complete row of a TSV with its host time (see [`read_samples`]).
+pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), TsvError> {
+    let name = path.display().to_string();
+    let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
+        Box::new(std::io::BufReader::new(std::io::stdin()))
+    } else {
+        let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
+            source_name: name.clone(),
+            line: 0,
+            source: e,
+        })?;
+        Box::new(std::io::BufReader::new(f))
+    };
+    let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;
+    let (mut out, mut skipped) = (Vec::new(), 0);
+    while let Some(row) = reader.next_row()? {
+        if row.sample.is_finite() {
+            out.push(row);
+        } else {
+            skipped += 1;
+        }
+    }
+    Ok((out, skipped))
 }
 
 /// Reads every complete row of a TSV (rows with a non-finite t, force, velocity or acceleration

@@ -1,11 +1,27 @@
 //! The diagnosis as text and as plots.
 
-use super::Report;
+use super::{Report, Verdict};
 use crate::figure::{Figure, Panel, Series, Style};
 
 /// A readable report.
 pub fn to_text(r: &Report, source: &str) -> String {
     let mut s = String::new();
+    if let Verdict::CannotJudge { reasons } = &r.verdict {
+        s += &format!(
+            "propid diagnose {source}: {} samples over {:.1} s\n\ncannot judge: {}\n",
+            r.samples,
+            r.duration_s,
+            reasons
+                .iter()
+                .map(|w| w.to_string())
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+        for n in &r.notes {
+            s += &format!("   Note: {n}\n");
+        }
+        return s;
+    }
     let b = &r.base;
     s += &format!(
         "propid diagnose {source}: {} samples over {:.1} s at {:.0} Hz\n\n",
@@ -42,8 +58,16 @@ pub fn to_text(r: &Report, source: &str) -> String {
         );
     }
     s += "\n4. Verdict\n";
-    if r.effects.is_empty() && r.unexplained.is_none() {
+    if r.verdict == Verdict::NothingWrong {
         s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
+    }
+    if let Some(a) = &r.ambiguity {
+        s += &format!(
+            "   Ambiguous between {} = {:.4e} {} and {} = {:.4e} {}: both explain the held-out data about\n   \
+             equally well (gains {:.2} % and {:.2} %), so neither is named. To separate them: {}.\n",
+            a.between[0], a.values[0], a.units[0], a.between[1], a.values[1], a.units[1],
+            a.cv_gain_percent[0], a.cv_gain_percent[1], a.separate_with
+        );
     }
     for e in &r.effects {
         s += &format!(
@@ -64,7 +88,18 @@ pub fn to_text(r: &Report, source: &str) -> String {
     );
     match &r.unexplained {
         Some(u) => s += &format!("   Unexplained: {}\n", u.description),
-        None => s += "   Unexplained: nothing (no periodic structure left in the residual)\n",
+        None => s += "   Unexplained periodic structure: none left in the residual\n",
+    }
+    if let Some(c) = &r.concentration {
+        let at = if c.condition == "time_window" {
+            format!("between t = {:.1} s and {:.1} s", c.from_s, c.to_s)
+        } else {
+            format!("while {}", c.condition.replace('_', " "))
+        };
+        s += &format!(
+            "   Unexplained, concentrated {at}: {:.0} % of the remaining held-out error in {:.0} % of the held-out samples\n",
+            c.error_percent, c.samples_percent
+        );
     }
     for n in &r.notes {
         s += &format!("   Note: {n}\n");

@@ -22,6 +22,15 @@ pub struct Signals {
     pub force_rate: Vec<f64>,
     /// d(acceleration)/dt, the same way [rad/s³].
     pub jerk: Vec<f64>,
+    /// Instrument for Ḟ: the difference quotient of the force samples just outside the slope's
+    /// window (independent noise, the same change).
+    pub force_rate_instrument: Vec<f64>,
+    /// The same for ȧ.
+    pub jerk_instrument: Vec<f64>,
+    /// Whether the rotor is slowing down at each sample: the slope of the measured velocity over
+    /// ±20 ms opposes the velocity (not the reported acceleration, whose noise is in the
+    /// equation's left-hand side).
+    pub decelerating: Vec<bool>,
     /// Median sample rate [Hz].
     pub rate: f64,
     /// First sample the regressions use: the first half second is a warm-up for the lag filters
@@ -48,6 +57,25 @@ fn local_slope(t: &[f64], x: &[f64], h: usize) -> Vec<f64> {
             }
             if sxx > 0.0 {
                 sxy / sxx
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// The instrument of a local slope over ±h samples: the difference quotient of the samples just
+/// outside that window, (x[i+g] − x[i−g]) / (t[i+g] − t[i−g]) with g = h + 1 (one-sided at the
+/// ends). It shares no sample with the slope at i (independent noise) and sees the same change,
+/// a smooth one or a step.
+fn instrument(t: &[f64], x: &[f64], g: usize) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(g), (i + g).min(n - 1));
+            let dt = t[b] - t[a];
+            if dt > 0.0 && a != b {
+                (x[b] - x[a]) / dt
             } else {
                 0.0
             }
@@ -98,11 +126,23 @@ impl Signals {
             .position(|x| *x >= warm_up)
             .unwrap_or(0)
             .min(t.len() / 2);
+        let velocity: Vec<f64> = samples.iter().map(|s| s.velocity).collect();
+        let slowing = local_slope(&t, &velocity, 2 * h);
+        let decelerating = slowing
+            .iter()
+            .zip(&velocity)
+            .map(|(d, w)| d * w.signum() < 0.0)
+            .collect();
+        let force_rate = local_slope(&t, &force, h);
+        let jerk = local_slope(&t, &acceleration, h);
         Ok(Signals {
             first,
-            force_rate: local_slope(&t, &force, h),
-            jerk: local_slope(&t, &acceleration, h),
-            velocity: samples.iter().map(|s| s.velocity).collect(),
+            force_rate_instrument: instrument(&t, &force, h + 1),
+            jerk_instrument: instrument(&t, &acceleration, h + 1),
+            force_rate,
+            jerk,
+            velocity,
+            decelerating,
             t,
             force,
             acceleration,

@@ -1,0 +1,223 @@
+//! Hidden effects on the mechanism-level stand (`propid-mechsim`, written independently of the
+//! diagnosis): one mechanism at a random magnitude, a random feedback rate (100–1000 Hz), the
+//! seed's sine and a chirp, and what a correct diagnosis must report as the scenario states it
+//! (derived from the mechanism, not from the diagnosis's equations). Each effect named alone, or,
+//! where the scenario says the pattern cannot separate it from another, "ambiguous" between the
+//! two with the right one among them; its parameter within 10 % (plus the scenario's stated
+//! derivation error); the extended J and c2 within 2 % of what the scenario says the data hold.
+//! Seeds are drawn from a fixed seed (printed), so a failure is reproducible.
+
+use propid_io::tsv::{Row, Sample};
+use propid_mechsim::scenarios::{Bench, Expect, Hidden, Scenario};
+use propid_mechsim::{pattern, MechConfig, Record};
+use propid_science::diagnose::{diagnose_rows, Options, Report, Verdict};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+
+const DURATION: f64 = 60.0;
+const PERIOD: f64 = 2.0;
+
+#[derive(Clone, Copy, Debug)]
+enum Pattern {
+    Sine,
+    Chirp,
+}
+
+fn rows(records: &[Record]) -> Vec<Row> {
+    records
+        .iter()
+        .map(|r| Row {
+            ts_local: r.ts_local,
+            sample: Sample {
+                t: r.t,
+                force: r.force,
+                velocity: r.velocity,
+                acceleration: r.acceleration,
+                position: r.position,
+            },
+        })
+        .collect()
+}
+
+fn bench(rate: f64, pattern: Pattern) -> Bench {
+    let mut base = MechConfig::default().with_typical_noise();
+    base.link.rate = rate;
+    Bench {
+        base,
+        lo: 0.1,
+        hi: 0.9,
+        duration: DURATION,
+        max_hz: match pattern {
+            Pattern::Sine => 1.0 / PERIOD,
+            Pattern::Chirp => 10.0 / PERIOD,
+        },
+    }
+}
+
+fn run(s: &Scenario, p: Pattern, seed: u64) -> Report {
+    let b = &s.bench;
+    let records = match p {
+        Pattern::Sine => s.simulate(pattern::sine(b.lo, b.hi, PERIOD), seed),
+        Pattern::Chirp => s.simulate(pattern::chirp(b.lo, b.hi, PERIOD, b.duration), seed),
+    }
+    .expect("scenario simulates");
+    diagnose_rows(&rows(&records), Options::default()).expect("diagnosis runs")
+}
+
+fn describe(r: &Report) -> String {
+    let effects: Vec<String> = r
+        .effects
+        .iter()
+        .map(|e| format!("{}={:.4e}", e.name, e.value))
+        .collect();
+    format!(
+        "{:?} [{}] ambiguous {:?}, J {:.4e}, c2 {:.4e}, sim {:.2} → {:.2}",
+        r.verdict,
+        effects.join(", "),
+        r.ambiguity.as_ref().map(|a| (a.between, a.values)),
+        r.extended.mass,
+        r.extended.c2,
+        r.simulation_rms.base,
+        r.simulation_rms.extended,
+    )
+}
+
+fn say(line: String) {
+    std::io::Write::write_all(&mut std::io::stderr(), (line + "\n").as_bytes()).unwrap();
+}
+
+/// What is wrong with report `r` for scenario `s` on pattern `p` (empty: right).
+fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
+    let mut bad = Vec::new();
+    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+    match s.expect {
+        Expect::Nothing | Expect::NotIdentifiable { .. } => {
+            if r.verdict != Verdict::NothingWrong {
+                bad.push(format!("expected nothing, got {:?} {names:?}", r.verdict));
+            }
+        }
+        Expect::Effect(e) => {
+            let tolerance = 0.10 + e.derivation_error;
+            let found = if let Some(a) = &r.ambiguity {
+                // A rotor that never reverses (lo > 0) cannot tell a Coulomb friction from a
+                // force offset: both are one constant torque, on any pattern.
+                let constant =
+                    a.between.contains(&"coulomb_friction") && a.between.contains(&"force_offset");
+                let allowed = match (e.ambiguous_with, p) {
+                    (Some((other, _)), _) => a.between.contains(&other),
+                    _ if constant => true,
+                    (None, Pattern::Sine) => true,
+                    (None, Pattern::Chirp) => false,
+                };
+                match a.between.iter().position(|n| *n == e.name) {
+                    Some(k) if allowed => Some(a.values[k]),
+                    _ => {
+                        bad.push(format!(
+                            "ambiguous {:?} where {} is expected",
+                            a.between, e.name
+                        ));
+                        None
+                    }
+                }
+            } else if names == [e.name] {
+                Some(r.effects[0].value)
+            } else {
+                bad.push(format!("named {names:?}, expected [{}]", e.name));
+                None
+            };
+            if let Some(v) = found {
+                if ((v - e.value) / e.value).abs() > tolerance {
+                    bad.push(format!(
+                        "{} = {v:.4e}, expected {:.4e} within {:.0} %",
+                        e.name,
+                        e.value,
+                        tolerance * 100.0
+                    ));
+                }
+            }
+        }
+        Expect::Unexplained { .. } => unreachable!("not drawn here"),
+    }
+    if r.ambiguity.is_none() && !matches!(r.verdict, Verdict::CannotJudge { .. }) {
+        let (j, c2) = (r.extended.mass, r.extended.c2);
+        if (j / s.fit.inertia - 1.0).abs() > 0.02 || (c2 / s.fit.c2 - 1.0).abs() > 0.02 {
+            bad.push(format!(
+                "extended J {j:.4e} (expected {:.4e}), c2 {c2:.4e} (expected {:.4e})",
+                s.fit.inertia, s.fit.c2
+            ));
+        }
+    }
+    bad
+}
+
+fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    say(format!("mechanism stand, rng seed {seed}:"));
+    let mut failures = Vec::new();
+    for &h in hidden {
+        for p in [Pattern::Sine, Pattern::Chirp] {
+            let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
+            let s = h.draw(&bench(rate, p), &mut rng);
+            let r = run(&s, p, rng.random());
+            let bad = judge(&s, p, &r);
+            say(format!(
+                "  {:<22} {:?} {rate} Hz magnitude {:.4e}: {} {}",
+                h.name(),
+                p,
+                s.magnitude,
+                describe(&r),
+                if bad.is_empty() {
+                    "ok".into()
+                } else {
+                    format!("WRONG: {}", bad.join("; "))
+                }
+            ));
+            failures.extend(
+                bad.into_iter()
+                    .map(|b| format!("{} {p:?} {rate} Hz: {b}", h.name())),
+            );
+        }
+    }
+    failures
+}
+
+/// The mechanisms diagnose gets right on the sine and on a chirp.
+#[test]
+fn mechanisms_are_named_and_measured() {
+    let failures = check(
+        &[
+            Hidden::Clean,
+            Hidden::CurrentLoopMeasured,
+            Hidden::ForceOffset,
+            Hidden::ClockRate,
+            Hidden::KtError,
+            Hidden::ReynoldsDrag,
+            Hidden::DroppedMessages,
+            Hidden::TimestampJitter,
+        ],
+        20261123,
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
+/// cannot find"); run with `-- --ignored` to see where each stands.
+#[test]
+#[ignore = "known failures, see docs/SCIENCE.md: lags half a sample long without the formula stand's setpoint lead, a second-order stage is not a first-order lag, braking drags in an acceleration_lag, viscous vs drag exponent on a chirp, cogging and Stribeck on the sine"]
+fn mechanisms_diagnose_still_gets_wrong() {
+    let failures = check(
+        &[
+            Hidden::CurrentSenseFilter,
+            Hidden::AccelerationFilter,
+            Hidden::CurrentLoopDemand,
+            Hidden::VelocityObserver,
+            Hidden::LoadCell,
+            Hidden::Braking,
+            Hidden::Viscous,
+            Hidden::Cogging,
+            Hidden::Stribeck,
+        ],
+        20261123,
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
