@@ -26,6 +26,12 @@ pub fn exit_status_for(err: &anyhow::Error) -> u8 {
     let bad_input = err.chain().any(|e| {
         e.downcast_ref::<InputError>().is_some()
             || e.downcast_ref::<propid_io::tsv::TsvError>().is_some()
+            // `#[error(transparent)]` wrappers hide their inner error from the chain.
+            || e.downcast_ref::<propid_science::fit::FitError>().is_some()
+            || matches!(
+                e.downcast_ref::<propid_io::candump::ReplayError>(),
+                Some(propid_io::candump::ReplayError::Input(_))
+            )
     });
     if bad_input {
         2
