@@ -204,7 +204,7 @@ pub enum ReplayError {
     #[error(transparent)]
     Input(#[from] InputError),
     /// Reading the log failed (the rows before it are written and flushed).
-    #[error("{name}: line {line}: {source}")]
+    #[error("{name}: line {line}")]
     Read {
         /// The log's name.
         name: String,
@@ -215,7 +215,7 @@ pub enum ReplayError {
         source: std::io::Error,
     },
     /// Writing the TSV failed.
-    #[error("writing the TSV: {0}")]
+    #[error("writing the TSV")]
     Write(#[from] std::io::Error),
 }
 

@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text, Options};
 
 use crate::InputError;
@@ -48,8 +47,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .push(format!("{skipped} rows with missing values were skipped"));
     }
     if let Some(path) = &args.plot {
-        crate::plot::write(path, &report_figure(&report))
-            .with_context(|| format!("writing the plot {}", path.display()))?;
+        crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
     }
     let text = match args.format {

@@ -42,7 +42,12 @@ fn write(imported: &Imported, output: Option<&Path>) -> anyhow::Result<()> {
         )),
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
-    write_tsv(imported, out)?;
+    write_tsv(imported, out).with_context(|| {
+        format!(
+            "writing {}",
+            output.map_or("standard output".into(), |p| p.display().to_string())
+        )
+    })?;
     eprintln!("import: {} rows", imported.rows.len());
     Ok(())
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use propid_core::can::RxError;
-use propid_io::candump::{replay, ReplayOptions, ReplaySummary};
+use propid_io::candump::{replay, ReplayError, ReplayOptions, ReplaySummary};
 
 use crate::InputError;
 
@@ -131,7 +131,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         feedback_id: args.feedback_id,
         source_node: args.source_node,
     };
-    let summary = replay(input, &name, &options, out)?;
+    let out_name = args
+        .output
+        .as_ref()
+        .map_or("standard output".into(), |p| p.display().to_string());
+    let summary = replay(input, &name, &options, out).map_err(|e| match e {
+        ReplayError::Write(io) => anyhow::Error::new(io).context(format!("writing {out_name}")),
+        other => other.into(),
+    })?;
     for line in describe(&summary, &name, args.feedback_id) {
         eprintln!("{line}");
     }
