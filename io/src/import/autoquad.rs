@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use super::{column, differentiate, mean_sd, number, open_csv, Imported, UpdateRate};
+use super::{column, csv_reader, differentiate, mean_sd, number, open_csv, Imported, UpdateRate};
 use crate::tsv::{Row, Sample};
 use crate::InputError;
 
@@ -33,12 +33,37 @@ fn pc_time(text: &str) -> Option<f64> {
 
 /// Imports an ESC32 log. `kv` [rpm/V] gives Kt = 60/(2π·kv); it must be finite and positive.
 pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
+    check_kv(kv)?;
+    let (reader, headers, file) = open_csv(path)?;
+    autoquad(reader, headers, file, kv)
+}
+
+/// [`import_autoquad`] from any reader; `name` names it in messages.
+pub fn read_autoquad(
+    input: impl std::io::Read,
+    name: &str,
+    kv: f64,
+) -> Result<Imported, InputError> {
+    check_kv(kv)?;
+    let (reader, headers, file) = csv_reader(Box::new(input), name.to_owned())?;
+    autoquad(reader, headers, file, kv)
+}
+
+fn check_kv(kv: f64) -> Result<(), InputError> {
     if !kv.is_finite() || kv <= 0.0 {
         return Err(InputError(format!(
             "kv must be a finite positive number of rpm/V (got {kv})"
         )));
     }
-    let (mut reader, headers, file) = open_csv(path)?;
+    Ok(())
+}
+
+fn autoquad(
+    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    headers: csv::StringRecord,
+    file: String,
+    kv: f64,
+) -> Result<Imported, InputError> {
     let (stamp, _) = column(&headers, &["Timestamp"], &file)?;
     let (amps, amps_name) = column(&headers, &["Amps"], &file)?;
     let (rpm, rpm_name) = column(&headers, &["RPM"], &file)?;

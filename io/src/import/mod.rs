@@ -28,8 +28,8 @@ use std::path::Path;
 use crate::tsv::{Row, TsvWriter};
 use crate::InputError;
 
-pub use autoquad::import_autoquad;
-pub use rcbench::{import_rcbench, RcbenchOptions};
+pub use autoquad::{import_autoquad, read_autoquad};
+pub use rcbench::{import_rcbench, read_rcbench, RcbenchOptions};
 
 /// An imported recording: the rows, the command column and what was measured and assumed.
 pub struct Imported {
@@ -135,20 +135,32 @@ pub(crate) fn mean_sd(x: &[f64]) -> (f64, f64) {
     (m, var.sqrt())
 }
 
+/// A CSV reader over some input, its header line, and the input's name for messages.
+pub(crate) type Csv<'a> = (
+    csv::Reader<Box<dyn std::io::Read + 'a>>,
+    csv::StringRecord,
+    String,
+);
+
 /// Opens a CSV log: the reader, its header and the file name for messages.
-pub(crate) fn open_csv(
-    path: &Path,
-) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord, String), InputError> {
+pub(crate) fn open_csv(path: &Path) -> Result<Csv<'static>, InputError> {
     let file = path.display().to_string();
-    let mut reader = csv::ReaderBuilder::new()
-        .flexible(true)
-        .from_path(path)
-        .map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
+    let f =
+        std::fs::File::open(path).map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
+    csv_reader(Box::new(f), file)
+}
+
+/// A CSV reader over any input (named `name` in messages), with its header.
+pub(crate) fn csv_reader(
+    input: Box<dyn std::io::Read + '_>,
+    name: String,
+) -> Result<Csv<'_>, InputError> {
+    let mut reader = csv::ReaderBuilder::new().flexible(true).from_reader(input);
     let headers = reader
         .headers()
-        .map_err(|e| InputError(format!("{file}: line 1: {e}")))?
+        .map_err(|e| InputError(format!("{name}: line 1: {e}")))?
         .clone();
-    Ok((reader, headers, file))
+    Ok((reader, headers, name))
 }
 
 /// A header name compared loosely: no byte-order mark, lower case, `µ`/`μ` as `u`, and no

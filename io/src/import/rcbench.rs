@@ -2,7 +2,9 @@
 
 use std::path::Path;
 
-use super::{column, differentiate, find_column, mean_sd, number, open_csv, Imported, UpdateRate};
+use super::{
+    column, csv_reader, differentiate, find_column, mean_sd, number, open_csv, Imported, UpdateRate,
+};
 use crate::tsv::{Row, Sample};
 use crate::InputError;
 
@@ -30,7 +32,26 @@ const COMMAND: &[&str] = &["ESC signal (µs)", "ESC signal (us)"];
 /// elsewhere: never interpolated), with the sign that makes the torque at steady speed oppose
 /// drag; the ESC signal as the `command` column when it was logged.
 pub fn import_rcbench(path: &Path, options: &RcbenchOptions) -> Result<Imported, InputError> {
-    let (mut reader, headers, file) = open_csv(path)?;
+    let (reader, headers, file) = open_csv(path)?;
+    rcbench(reader, headers, file, options)
+}
+
+/// [`import_rcbench`] from any reader; `name` names it in messages.
+pub fn read_rcbench(
+    input: impl std::io::Read,
+    name: &str,
+    options: &RcbenchOptions,
+) -> Result<Imported, InputError> {
+    let (reader, headers, file) = csv_reader(Box::new(input), name.to_owned())?;
+    rcbench(reader, headers, file, options)
+}
+
+fn rcbench(
+    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    headers: csv::StringRecord,
+    file: String,
+    options: &RcbenchOptions,
+) -> Result<Imported, InputError> {
     let (time, time_name, time_scale) = match find_column(&headers, TIME_MS) {
         Some((i, n)) => (i, n, 1e-3),
         None => {
