@@ -1,4 +1,4 @@
-//! Plots to SVG, PNG or a self-contained HTML page, chosen by the file extension.
+//! Plots to SVG, PNG or a self-contained interactive HTML page, chosen by the file extension.
 //!
 //! A [`Figure`] is a stack of [`Panel`]s with one x quantity (usually time), each panel scaled to
 //! its own data; each panel holds [`Series`]. Callers describe what to show; this module decides
@@ -42,15 +42,9 @@ fn write_inner(path: &Path, figure: &Figure) -> Result<(), String> {
             draw(backend.into_drawing_area(), figure)?;
         }
         "html" => {
-            let mut svg = String::new();
-            {
-                let backend = SVGBackend::with_string(&mut svg, (WIDTH, height));
-                draw(backend.into_drawing_area(), figure)?;
-            }
-            let page = format!(
-                "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{t}</title></head>\n\
-                 <body style=\"font-family:sans-serif\"><h1>{t}</h1>\n{svg}\n</body></html>\n",
-                t = html_escape(&figure.title)
+            let page = crate::html::page(
+                &figure.title,
+                &[crate::html::figure_section(figure, "figure")],
             );
             std::fs::write(path, page).map_err(|e| e.to_string())?;
         }
@@ -78,12 +72,6 @@ fn describe<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> S
         None if text.contains('(') && text.contains('{') => "the image encoder failed".into(),
         None => text.to_owned(),
     }
-}
-
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 /// The finite range of some values, widened a little (and made non-empty).
@@ -218,7 +206,8 @@ mod tests {
             assert!(bytes.len() > 1000, "{ext} too small");
             if ext != "png" {
                 let text = String::from_utf8(bytes).unwrap();
-                assert!(text.contains("<svg") && text.contains("sin"), "{ext}");
+                let drawn = if ext == "svg" { "<svg" } else { "uPlot" };
+                assert!(text.contains(drawn) && text.contains("sin"), "{ext}");
             } else {
                 assert_eq!(&bytes[1..4], b"PNG");
             }

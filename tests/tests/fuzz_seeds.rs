@@ -1,4 +1,4 @@
-//! The fuzz targets' seed corpora (fuzz/corpus/<target>/), generated here so that they are
+//! The fuzz targets' seed corpora (fuzz/corpus/<target>/seed-*), generated here so that they are
 //! valid by construction: multi-frame Cyphal transfers framed by the core's `FrameSplitter`,
 //! candump logs of them, TSV files and stand CSVs. The test fails when a committed seed differs
 //! from what this code generates; `PROPID_WRITE_FUZZ_SEEDS=1 cargo test -p propid-tests --test
@@ -150,7 +150,7 @@ fn reassembler_seeds() -> Vec<(String, Vec<u8>)> {
             for f in interleave(name, set) {
                 record(&mut bytes, &f, 100);
             }
-            (format!("{name}.bin"), bytes)
+            (format!("seed-{name}.bin"), bytes)
         })
         .collect()
 }
@@ -217,7 +217,7 @@ fn candump_seeds() -> Vec<(String, Vec<u8>)> {
         for (k, f) in interleave(name, &set).iter().enumerate() {
             log += &candump_line(f, 1_700_000_000_000_000 + 100 * k as u64);
         }
-        seeds.push((format!("{name}.log"), log.into_bytes()));
+        seeds.push((format!("seed-{name}.log"), log.into_bytes()));
     }
     let mut mixed = String::from("# a comment\n\n");
     for (k, f) in frames(SUBJECT, 10, 0, &payload(23, 1), Mtu::Classic, 0)
@@ -228,22 +228,22 @@ fn candump_seeds() -> Vec<(String, Vec<u8>)> {
         mixed += "(1.500100) can0 20000080#0000000000000000\n(1.500200) can0 1060640A#R\n(1.5003) can0 123#1122\n";
     }
     mixed += "(1.6) can0 1060642A#€0\n(99999999999999.5) can0 1060640A#E0\n(1.7) can0 1060640A#0\n";
-    seeds.push(("mixed_bad_lines.log".into(), mixed.into_bytes()));
+    seeds.push(("seed-mixed_bad_lines.log".into(), mixed.into_bytes()));
     seeds
 }
 
 fn tsv_seeds() -> Vec<(String, Vec<u8>)> {
     vec![
         (
-            "drive.tsv".into(),
+            "seed-drive.tsv".into(),
             b"ts_local\tt\tforce\tvelocity\tacceleration\tposition\n100.5\t0\t0.01\t10\t-1.5\t0.25\n100.51\t0.01\tnan\t10.1\t2e-3\tnan\n".to_vec(),
         ),
         (
-            "minimal.tsv".into(),
+            "seed-minimal.tsv".into(),
             b"t\tforce\tvelocity\tacceleration\n0\t1\t2\t3\n0.1\t1\t2\t3\n".to_vec(),
         ),
         (
-            "extra_columns_crlf.tsv".into(),
+            "seed-extra_columns_crlf.tsv".into(),
             b"t\tforce\tvelocity\tacceleration\tcommand\r\n0\t1\t2\t3\t1100\r\n1e-3\t-inf\t2\t3\t\r\n".to_vec(),
         ),
     ]
@@ -263,7 +263,7 @@ fn importer_seeds() -> Vec<(String, Vec<u8>)> {
     ] {
         let mut bytes = vec![which];
         bytes.extend_from_slice(text.as_bytes());
-        seeds.push((name.into(), bytes));
+        seeds.push((format!("seed-{name}"), bytes));
     }
     seeds
 }
@@ -290,8 +290,8 @@ fn candump_seeds_replay_their_transfers() {
         };
         let s = propid_io::candump::replay(&bytes[..], &name, &options, std::io::sink()).unwrap();
         let expected = match name.as_str() {
-            "truncated_to_extent_12.log" | "request_extent_0.log" => 0,
-            "back_to_back.log" => 4,
+            "seed-truncated_to_extent_12.log" | "seed-request_extent_0.log" => 0,
+            "seed-back_to_back.log" => 4,
             _ => 1,
         };
         assert_eq!(s.rows, expected, "{name}: {s:?}");
