@@ -16,7 +16,8 @@ use std::time::Duration;
 use std::collections::{BTreeMap, BTreeSet};
 
 use propid_core::can::{
-    CanId, Frame, Port, Reassembler, RxError, RxStats, Subscription, TransferKind,
+    CanId, Frame, NodeId, Port, Reassembler, RxError, RxStats, SubjectId, Subscription,
+    TransferKind,
 };
 use propid_core::dsdl::{DataType, DoF3rdTs};
 use propid_core::time::Instant;
@@ -229,18 +230,18 @@ pub fn replay(
     out: impl Write,
 ) -> Result<ReplaySummary, ReplayError> {
     let feedback_id = options.feedback_id;
-    if feedback_id > 8191 {
+    let Some(subject) = SubjectId::new(feedback_id) else {
         return Err(InputError(format!(
             "feedback subject-ID {feedback_id} is out of range (0..=8191)"
         ))
         .into());
-    }
+    };
     if let Some(n) = options.source_node.filter(|&n| n > 127) {
         return Err(InputError(format!("source node-ID {n} is out of range (0..=127)")).into());
     }
     let mut rx: Reassembler<1, 32, 64> = Reassembler::new(None);
     rx.subscribe(Subscription {
-        port: Port::Subject(feedback_id),
+        port: Port::Subject(subject),
         extent: DoF3rdTs::EXTENT_BYTES,
         transfer_id_timeout: Duration::from_secs(2),
     })
@@ -299,10 +300,12 @@ pub fn replay(
         let Some(id) = CanId::parse(frame.id()) else {
             continue;
         };
+        let source_of_frame = id.source.map(NodeId::get);
         match id.kind {
             TransferKind::Message { subject_id } => {
+                let subject_id = subject_id.get();
                 let e = subjects.entry(subject_id).or_default();
-                e.0.insert(id.source);
+                e.0.insert(source_of_frame);
                 e.1 += 1;
                 if subject_id != feedback_id {
                     continue;
@@ -314,9 +317,9 @@ pub fn replay(
             }
         }
         // One node's feedback only: the first seen unless one was chosen.
-        let source = *locked.get_or_insert(id.source);
-        if id.source != source {
-            *others.entry(id.source).or_default() += 1;
+        let source = *locked.get_or_insert(source_of_frame);
+        if source_of_frame != source {
+            *others.entry(source_of_frame).or_default() += 1;
             continue;
         }
         let Ok(Some(t)) = rx.accept(&frame) else {
@@ -451,9 +454,9 @@ mod tests {
         let header = TransferHeader {
             priority: Priority::NOMINAL,
             kind: TransferKind::Message {
-                subject_id: subject,
+                subject_id: SubjectId::new(subject).unwrap(),
             },
-            source: Some(node),
+            source: Some(NodeId::new(node).unwrap()),
             transfer_id: tid,
         };
         FrameSplitter::new(&header, &buf[..n], Mtu::Classic, Instant::from_micros(t_us))

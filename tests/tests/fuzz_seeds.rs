@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use propid_core::can::{
-    CanId, Frame, FrameSplitter, Mtu, Port, Priority, Reassembler, Subscription, TransferHeader,
-    TransferKind,
+    CanId, Frame, FrameSplitter, Mtu, NodeId, Port, Priority, Reassembler, ServiceId, SubjectId,
+    Subscription, TransferHeader, TransferKind,
 };
 use propid_core::time::Instant;
 
@@ -58,7 +58,7 @@ fn frames(
     let header = TransferHeader {
         priority: Priority::NOMINAL,
         kind,
-        source: Some(source),
+        source: Some(NodeId::new(source).unwrap()),
         transfer_id: tid,
     };
     FrameSplitter::new(&header, payload, mtu, Instant::from_micros(t_us))
@@ -81,11 +81,15 @@ fn record(out: &mut Vec<u8>, frame: &Frame, step_us: u16) {
     out.extend_from_slice(frame.data());
 }
 
-const SUBJECT: TransferKind = TransferKind::Message { subject_id: 100 };
-const OTHER: TransferKind = TransferKind::Message { subject_id: 7509 };
+const SUBJECT: TransferKind = TransferKind::Message {
+    subject_id: SubjectId::from_const(100),
+};
+const OTHER: TransferKind = TransferKind::Message {
+    subject_id: SubjectId::from_const(7509),
+};
 const REQUEST: TransferKind = TransferKind::Request {
-    service_id: 430,
-    destination: 42,
+    service_id: ServiceId::from_const(430),
+    destination: NodeId::from_const(42),
 };
 
 /// Seed transfers: (name, list of transfers as frame lists), interleaved frame by frame.
@@ -158,11 +162,11 @@ fn reassembler_seeds() -> Vec<(String, Vec<u8>)> {
 /// The reassembler fuzz harness, without the fuzzer: (multi-frame transfers delivered).
 fn harness(bytes: &[u8]) -> usize {
     const PORTS: [(Port, usize); 3] = [
-        (Port::Subject(100), 23),
-        (Port::Subject(7509), 12),
-        (Port::Request(430), 0),
+        (Port::Subject(SubjectId::from_const(100)), 23),
+        (Port::Subject(SubjectId::from_const(7509)), 12),
+        (Port::Request(ServiceId::from_const(430)), 0),
     ];
-    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(42));
+    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(NodeId::from_const(42)));
     for (port, extent) in PORTS {
         rx.subscribe(Subscription {
             port,
