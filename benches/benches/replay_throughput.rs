@@ -54,13 +54,13 @@ fn main() {
     let bytes = std::fs::metadata(&log).unwrap().len();
     let t0 = Clock::now();
     let input = std::io::BufReader::new(std::fs::File::open(&log).unwrap());
-    let rows = propid_io::candump::replay(
-        input,
-        "bus.log",
-        SubjectId::from_const(110),
-        std::io::sink(),
-    )
-    .unwrap();
+    let options = propid_io::candump::ReplayOptions {
+        feedback_id: SubjectId::from_const(110).get(),
+        source_node: None,
+    };
+    let rows = propid_io::candump::replay(input, "bus.log", &options, std::io::sink())
+        .unwrap()
+        .rows;
     let secs = t0.elapsed().as_secs_f64();
     assert_eq!(rows, transfers);
     println!(

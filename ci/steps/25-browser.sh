@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Pages in a real browser: headless Chromium (Debian's package) renders the HTML report and the
-# live page; the tests are #[ignore]d in the plain test run because they need the browser.
+# Pages in a real browser: Debian's Chromium renders the HTML report (headless --dump-dom) and,
+# driven by playwright-core (npm; it uses the system Chromium, downloads no browser), the live
+# page of `propid demo --live`: live data, the charts, the estimate, and the STOP button. These
+# tests are #[ignore]d in the plain test run because they need the browser.
 set -euo pipefail
 if ! command -v chromium >/dev/null; then
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
 fi
+(cd tests/browser && npm install --no-audit --no-fund --silent)
 cargo test -p propid --test report_html -- --ignored
+cargo test -p propid --test live_page -- --ignored

@@ -815,8 +815,8 @@ impl DriveOutcome {
 }
 
 /// Runs a [`Drive`] in real time on `transport` (see [`run_realtime`]): the TSV goes to `out`
-/// (header when the pattern starts, each row flushed as it comes), every other event to
-/// `on_event`.
+/// (header when the pattern starts, each row flushed as it comes, before `on_event` sees it), and
+/// every event goes to `on_event`.
 pub fn run_drive(
     cfg: DriveConfig,
     transport: &mut dyn CanTransport,
@@ -840,7 +840,6 @@ pub fn run_drive(
                 if let Some(w) = writer.as_mut() {
                     w.write(row).map_err(|e| e.to_string())?;
                 }
-                return Ok(());
             }
             DriveEvent::Stopped(r) => report = Some(r.clone()),
             _ => {}

@@ -7,7 +7,10 @@ use propid_core::dsdl::{
     DataType, DoF3rdTs, GetInfoRequest, GetInfoResponse, Heartbeat, Readiness, Vector31,
 };
 
-fn round_trip<T: DataType + PartialEq + core::fmt::Debug>(bytes: &[u8], same: impl Fn(&T, &T) -> bool) {
+fn round_trip<T: DataType + PartialEq + core::fmt::Debug>(
+    bytes: &[u8],
+    same: impl Fn(&T, &T) -> bool,
+) {
     if let Ok(v) = T::deserialize(bytes) {
         let mut buf = [0u8; 512];
         let n = v.serialize(&mut buf);
@@ -31,8 +34,18 @@ fuzz_target!(|bytes: &[u8]| {
         let (p, q) = (&a.value, &b.value);
         a.timestamp == b.timestamp
             && bits_equal(
-                &[p.kinematics.base.position, p.kinematics.base.velocity, p.kinematics.acceleration, p.force],
-                &[q.kinematics.base.position, q.kinematics.base.velocity, q.kinematics.acceleration, q.force],
+                &[
+                    p.kinematics.base.position,
+                    p.kinematics.base.velocity,
+                    p.kinematics.acceleration,
+                    p.force,
+                ],
+                &[
+                    q.kinematics.base.position,
+                    q.kinematics.base.velocity,
+                    q.kinematics.acceleration,
+                    q.force,
+                ],
             )
     });
 });

@@ -1,22 +1,32 @@
 //! Fuzz the reassembler: arbitrary frame sequences must never panic, and every delivered
-//! transfer must respect the subscription's extent and carry a header that matches its frames.
+//! transfer must respect its own port's extent and carry a header that matches its frames.
+//! The seed corpus (fuzz/corpus/reassembler/, written by tests/tests/fuzz_seeds.rs with the
+//! core's FrameSplitter) holds valid multi-frame transfers on every port, Classic and FD, so the
+//! fuzzer starts from deliveries instead of having to guess a transfer CRC.
 #![no_main]
 
 use core::time::Duration;
 
 use libfuzzer_sys::fuzz_target;
-use propid_core::can::{CanId, Frame, NodeId, Port, Reassembler, ServiceId, SubjectId, Subscription};
+use propid_core::can::{
+    CanId, Frame, NodeId, Port, Reassembler, ServiceId, SubjectId, Subscription,
+};
 use propid_core::time::Instant;
 
 fuzz_target!(|bytes: &[u8]| {
-    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(NodeId::from_const(42)));
-    for (port, extent) in [
+    const PORTS: [(Port, usize); 3] = [
         (Port::Subject(SubjectId::from_const(100)), 23),
         (Port::Subject(SubjectId::from_const(7509)), 12),
         (Port::Request(ServiceId::from_const(430)), 0),
-    ] {
-        rx.subscribe(Subscription { port, extent, transfer_id_timeout: Duration::from_millis(50) })
-            .unwrap();
+    ];
+    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(NodeId::from_const(42)));
+    for (port, extent) in PORTS {
+        rx.subscribe(Subscription {
+            port,
+            extent,
+            transfer_id_timeout: Duration::from_millis(50),
+        })
+        .unwrap();
     }
     // Each record: 4 bytes ID, 1 byte length, 2 bytes time step (µs), then the data.
     let mut rest = bytes;
@@ -31,9 +41,18 @@ fuzz_target!(|bytes: &[u8]| {
         rest = tail;
         let frame = Frame::new(Instant::from_micros(now), id, data).unwrap();
         if let Ok(Some(t)) = rx.accept(&frame) {
-            assert!(t.payload.len() <= 23);
             let parsed = CanId::parse(id).expect("delivered from a valid Cyphal ID");
             assert_eq!(t.header.kind.port(), parsed.kind.port());
+            let extent = PORTS
+                .iter()
+                .find(|(p, _)| *p == t.header.kind.port())
+                .expect("delivered on a subscribed port")
+                .1;
+            assert!(
+                t.payload.len() <= extent,
+                "{} bytes on a port of extent {extent}",
+                t.payload.len()
+            );
         }
     }
 });

@@ -25,13 +25,26 @@ fuzz_target!(|input: &[u8]| {
     let (whole, whole_garbage) = decode_in_pieces(bytes, bytes.len());
     assert_eq!(events, whole, "events depend on where the stream was cut");
     assert_eq!(garbage, whole_garbage);
-    let garbage_events = events.iter().filter(|e| matches!(e, Event::Garbage(_))).count();
+    let garbage_events = events
+        .iter()
+        .filter(|e| matches!(e, Event::Garbage(_)))
+        .count();
     assert_eq!(garbage, garbage_events as u64);
     for event in &events {
-        let Event::Frame { id, extended, data, remote, adapter_ms } = event else {
+        let Event::Frame {
+            id,
+            extended,
+            data,
+            remote,
+            adapter_ms,
+        } = event
+        else {
             continue;
         };
-        assert!(*id <= if *extended { 0x1FFF_FFFF } else { 0x7FF }, "ID {id:#X}");
+        assert!(
+            *id <= if *extended { 0x1FFF_FFFF } else { 0x7FF },
+            "ID {id:#X}"
+        );
         assert!(data.len() <= 8, "{} data bytes", data.len());
         assert!(!*remote || data.is_empty(), "a remote frame with data");
         if let Some(ms) = adapter_ms {

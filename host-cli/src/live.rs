@@ -15,7 +15,6 @@
 //! STOP: it does not know the token, and a cross-site form cannot set the header); the page can
 //! only stop the drive — it never sends a setpoint.
 
-use std::io::Read;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -227,38 +226,26 @@ impl LiveState {
     }
 }
 
-/// A Server-Sent Events stream: blocks between pushes; ends when the server shuts down.
-struct EventStream {
-    state: Arc<LiveState>,
-    shutdown: Arc<AtomicBool>,
-    after: u64,
-    estimates_after: usize,
-    buf: Vec<u8>,
-    pos: usize,
-    first: bool,
-}
-
-impl Read for EventStream {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        if self.pos == self.buf.len() {
-            if self.shutdown.load(Ordering::Relaxed) {
-                return Ok(0);
-            }
-            if !self.first {
-                std::thread::sleep(PUSH_PERIOD);
-            }
-            self.first = false;
-            let (json, seq, est) = self.state.update_since(self.after, self.estimates_after);
-            self.after = seq;
-            self.estimates_after = est;
-            self.buf = format!("data: {json}\n\n").into_bytes();
-            self.pos = 0;
-        }
-        let n = out.len().min(self.buf.len() - self.pos);
-        out[..n].copy_from_slice(&self.buf[self.pos..self.pos + n]);
-        self.pos += n;
-        Ok(n)
+/// Writes a Server-Sent Events response on the raw connection: a header, then what is new every
+/// [`PUSH_PERIOD`], each message flushed; ends when the viewer goes or the server shuts down.
+fn stream_events(
+    w: &mut dyn std::io::Write,
+    state: &LiveState,
+    shutdown: &AtomicBool,
+) -> std::io::Result<()> {
+    w.write_all(
+        b"HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-cache\r\nConnection: close\r\n\r\n",
+    )?;
+    let (mut after, mut estimates_after) = (0, 0);
+    while !shutdown.load(Ordering::Relaxed) {
+        let (json, seq, est) = state.update_since(after, estimates_after);
+        after = seq;
+        estimates_after = est;
+        w.write_all(format!("data: {json}\n\n").as_bytes())?;
+        w.flush()?;
+        std::thread::sleep(PUSH_PERIOD);
     }
+    Ok(())
 }
 
 /// The running server. Dropping it stops it.
@@ -392,31 +379,15 @@ fn accept_loop(
                     .with_header(content_type("text/html; charset=utf-8")),
             ),
             (tiny_http::Method::Get, "/events") => {
-                let stream = EventStream {
-                    state: Arc::clone(state),
-                    shutdown: Arc::clone(shutdown),
-                    after: 0,
-                    estimates_after: 0,
-                    buf: Vec::new(),
-                    pos: 0,
-                    first: true,
-                };
+                let (state, shutdown) = (Arc::clone(state), Arc::clone(shutdown));
                 // Each viewer gets its own thread: a slow browser never holds up another one.
+                // The stream is written by hand on the raw connection so that every message is
+                // flushed as it is made (no chunking, no buffering until a chunk fills).
                 let _ = std::thread::Builder::new()
                     .name("live-events".into())
                     .spawn(move || {
-                        let response = tiny_http::Response::new(
-                            tiny_http::StatusCode(200),
-                            vec![
-                                content_type("text/event-stream"),
-                                tiny_http::Header::from_bytes("Cache-Control", "no-cache")
-                                    .expect("a valid header"),
-                            ],
-                            stream,
-                            None,
-                            None,
-                        );
-                        let _ = request.respond(response);
+                        let mut w = request.into_writer();
+                        let _ = stream_events(&mut *w, &state, &shutdown);
                     });
                 Ok(())
             }
@@ -464,7 +435,8 @@ function mk(id, series) {{
   const el = document.getElementById(id);
   const width = Math.max(400, Math.min(1200, document.body.clientWidth - 40));
   return new uPlot({{width, height: 200, series: [{{label: "t [s]"}}].concat(series),
-    scales: {{x: {{time: false}}}}, axes: [{{}}, {{size: 70}}]}}, [[]].concat(series.map(() => [])), el);
+    scales: {{x: {{time: false}}}},
+    axes: [{{}}, {{size: 80, values: (u, vals) => vals.map(v => (v !== 0 && Math.abs(v) < 1e-2) ? v.toExponential(2) : v)}}]}}, [[]].concat(series.map(() => [])), el);
 }}
 const band = (label, colour) => [{{label, stroke: colour, width: 1.5}},
   {{label: "−2σ", stroke: colour, dash: [4, 4], width: 1}}, {{label: "+2σ", stroke: colour, dash: [4, 4], width: 1}}];
@@ -506,8 +478,9 @@ source.onmessage = (ev) => {{
   const e = est.j.length ? est.j.length - 1 : -1;
   document.getElementById("j").textContent = e >= 0 ? fmt(est.j[e]) + " ± " + fmt((est.jhi[e] - est.j[e]) / 2) : "–";
   document.getElementById("c2").textContent = e >= 0 ? fmt(est.c2[e]) + " ± " + fmt((est.chi[e] - est.c2[e]) / 2) : "–";
-  document.getElementById("rx").textContent = u.bus.frames_rx_per_s.toFixed(0);
-  document.getElementById("tx").textContent = u.bus.frames_tx_per_s.toFixed(0);
+  const num = (x) => (x === null || x === undefined || !isFinite(x)) ? "–" : x.toFixed(0);
+  document.getElementById("rx").textContent = num(u.bus.frames_rx_per_s);
+  document.getElementById("tx").textContent = num(u.bus.frames_tx_per_s);
   document.getElementById("drop").textContent = u.bus.tx_dropped;
   document.getElementById("rej").textContent = u.bus.rx_rejected;
   document.getElementById("aerr").textContent = u.bus.adapter_errors;
@@ -526,10 +499,131 @@ document.getElementById("stop").onclick = async () => {{
     crate::html::page(title, &[body])
 }
 
+/// Feeds the live page from a drive's events (rows, progress, the stop).
+pub struct DriveView {
+    feed: LiveFeed,
+    excitation: propid_science::excitation::Excitation,
+    first_t: Option<f64>,
+    last_progress: Option<std::time::Instant>,
+}
+
+impl DriveView {
+    /// A view of a drive playing `excitation`, published into `state`.
+    pub fn new(state: Arc<LiveState>, excitation: propid_science::excitation::Excitation) -> Self {
+        let mut feed = LiveFeed::new(state);
+        feed.readiness("ENGAGED");
+        feed.status(
+            "init phase: at the high setpoint, feedback not recorded",
+            false,
+        );
+        DriveView {
+            feed,
+            excitation,
+            first_t: None,
+            last_progress: None,
+        }
+    }
+
+    /// Takes one event of the drive (never blocks).
+    pub fn on_event(&mut self, event: &propid_drive::drive::DriveEvent) {
+        use propid_drive::drive::DriveEvent;
+        match event {
+            DriveEvent::PatternStarted => self.feed.status(
+                format!(
+                    "running: {} pattern, {} s",
+                    self.excitation.pattern, self.excitation.duration
+                ),
+                false,
+            ),
+            DriveEvent::Row(row) => {
+                let s = row.sample;
+                // The device clock's time since the first row stands for the pattern's time.
+                let t0 = *self.first_t.get_or_insert(s.t);
+                self.feed.sample(LivePoint {
+                    t: s.t,
+                    setpoint: self.excitation.setpoint(s.t - t0),
+                    force: s.force,
+                    velocity: s.velocity,
+                    acceleration: s.acceleration,
+                });
+            }
+            DriveEvent::Progress(p) => {
+                let now = std::time::Instant::now();
+                let dt = self
+                    .last_progress
+                    .map_or(1.0, |l| now.duration_since(l).as_secs_f64().max(1e-3));
+                self.last_progress = Some(now);
+                if let Some(e) = p.estimate {
+                    self.feed.estimate(LiveEstimate {
+                        t: p.elapsed,
+                        j: e.j,
+                        j_stderr: e.j_stderr,
+                        c2: e.c2,
+                        c2_stderr: e.c2_stderr,
+                    });
+                }
+                self.feed.bus(LiveBus {
+                    frames_rx_per_s: p.feedback_per_s as f64 / dt,
+                    frames_tx_per_s: f64::NAN,
+                    tx_dropped: p.tx.dropped,
+                    rx_rejected: p.dropped_transfers,
+                    adapter_errors: p.tx.refused,
+                });
+            }
+            DriveEvent::Stopping(reason) => {
+                self.feed.readiness("STANDBY");
+                self.feed.status(
+                    format!("stopping ({reason}): STANDBY and a zero setpoint"),
+                    false,
+                );
+            }
+            DriveEvent::Stopped(report) => {
+                self.feed.readiness("STANDBY");
+                self.feed.status(
+                    format!("stopped ({}); {} rows recorded", report.reason, report.rows),
+                    true,
+                );
+                self.feed.flush();
+            }
+        }
+    }
+}
+
+/// Starts the live page for a drive if `addr` is given: prints the URL on stderr.
+pub fn start_for_drive(
+    addr: Option<&str>,
+    allow_remote: bool,
+    stop: &Arc<AtomicBool>,
+    excitation: propid_science::excitation::Excitation,
+    title: &str,
+) -> anyhow::Result<Option<(LiveServer, DriveView)>> {
+    let Some(addr) = addr else {
+        return Ok(None);
+    };
+    let addr = check_addr(addr, allow_remote)?;
+    if !addr.ip().is_loopback() {
+        eprintln!(
+            "warning: the live page is served on {addr}, beyond this machine; anyone who reaches it with the token can stop the drive"
+        );
+    }
+    let state = Arc::new(LiveState::default());
+    let server = serve(
+        addr,
+        Arc::clone(&state),
+        Arc::clone(stop),
+        title.to_string(),
+    )?;
+    eprintln!(
+        "live: open {} (STOP there does what Ctrl-C does)",
+        server.url()
+    );
+    Ok(Some((server, DriveView::new(state, excitation))))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::io::{BufRead, BufReader, Write};
+    use std::io::{BufRead, BufReader, Read, Write};
     use std::net::TcpStream;
 
     fn get(addr: SocketAddr, request: &str) -> (u16, String) {

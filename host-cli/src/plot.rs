@@ -6,7 +6,6 @@
 
 use std::path::Path;
 
-use anyhow::Context;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -19,8 +18,14 @@ const WIDTH: u32 = 1200;
 /// Largest number of points drawn per series (longer series are decimated by stride).
 const MAX_POINTS: usize = 5000;
 
-/// Writes `figure` to `path`; the format follows the extension (`.svg`, `.png`, `.html`).
+/// Writes `figure` to `path`; the format follows the extension (`.svg`, `.png`, `.html`). Every
+/// error names the path and says why in words (never the plotting library's debug text).
 pub fn write(path: &Path, figure: &Figure) -> anyhow::Result<()> {
+    write_inner(path, figure)
+        .map_err(|why| anyhow::anyhow!("cannot write the plot {}: {why}", path.display()))
+}
+
+fn write_inner(path: &Path, figure: &Figure) -> Result<(), String> {
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
@@ -41,17 +46,35 @@ pub fn write(path: &Path, figure: &Figure) -> anyhow::Result<()> {
                 &figure.title,
                 &[crate::html::figure_section(figure, "figure")],
             );
-            std::fs::write(path, page)
-                .with_context(|| format!("cannot write {}", path.display()))?;
+            std::fs::write(path, page).map_err(|e| e.to_string())?;
         }
-        other => anyhow::bail!(
-            "{}: unknown plot format `{other}` (use .svg, .png or .html)",
-            path.display()
-        ),
+        other => {
+            return Err(format!(
+                "unknown plot format `{other}` (use .svg, .png or .html)"
+            ))
+        }
     }
     Ok(())
 }
 
+/// A plotting error in words: the operating system's or the image encoder's message, not the
+/// nested debug form (`BackendError(DrawingError(Os {…}))`).
+fn describe<E: std::error::Error + Send + Sync>(e: DrawingAreaErrorKind<E>) -> String {
+    // plotters' Display nests "backend error: Drawing backend error: <the OS's message>".
+    let text = e.to_string();
+    let text = text
+        .trim_start_matches("backend error: ")
+        .trim_start_matches("Drawing backend error: ");
+    // The bitmap backend's own error only has a debug form (`ImageError(IoError(Os { …,
+    // message: "No such file or directory" }))`): keep the operating system's message.
+    match text.split_once("message: \"") {
+        Some((_, rest)) => rest.split('"').next().unwrap_or(rest).to_owned(),
+        None if text.contains('(') && text.contains('{') => "the image encoder failed".into(),
+        None => text.to_owned(),
+    }
+}
+
+/// The finite range of some values, widened a little (and made non-empty).
 fn range_of<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for &v in values {
@@ -80,11 +103,11 @@ const PALETTE: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
-fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> anyhow::Result<()>
+fn draw<DB: DrawingBackend>(root: DrawingArea<DB, Shift>, figure: &Figure) -> Result<(), String>
 where
     DB::ErrorType: 'static,
 {
-    let err = |e: DrawingAreaErrorKind<DB::ErrorType>| anyhow::anyhow!("plot: {e:?}");
+    let err = describe::<DB::ErrorType>;
     root.fill(&WHITE).map_err(err)?;
     let root = root
         .titled(&figure.title, ("sans-serif", 24))

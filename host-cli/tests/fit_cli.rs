@@ -64,8 +64,87 @@ fn fits_from_file_and_stdin_in_yaml_and_json() {
     );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!((v["mass"].as_f64().unwrap() / 0.5 - 1.0).abs() < 1e-9);
-    assert!(v["mass_stderr"].as_f64().unwrap() >= 0.0);
+    // Exact samples: the standard error is round-off, not zero by construction.
+    let se = v["mass_stderr"].as_f64().unwrap();
+    assert!(se.is_finite() && se < 1e-6 * 0.5, "mass_stderr {se}");
     assert_eq!(v["at_bound"][0], "c1");
+}
+
+/// A reproducible standard normal deviate (xorshift64* and Box–Muller).
+fn gauss(state: &mut u64) -> f64 {
+    let mut uniform = || {
+        *state ^= *state >> 12;
+        *state ^= *state << 25;
+        *state ^= *state >> 27;
+        (state.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let (u1, u2) = (uniform().max(1e-300), uniform());
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+#[test]
+fn reported_standard_errors_match_the_scatter_of_repeated_fits() {
+    // J = 0.5, c1 = 0.2 (free: --c1-max 1), c2 = 0.02; white noise of 0.5 rad/s² on the logged
+    // acceleration. 40 independent noise draws: the standard deviation of the fitted J and c2
+    // must match the standard error propid reports (the scatter of a standard deviation over
+    // 40 draws is ±11 %, so [0.7, 1.4] is a 3-sigma band).
+    let (j, c1, c2, sigma) = (0.5, 0.2, 0.02, 0.5);
+    let dir = tempfile::tempdir().unwrap();
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let (mut js, mut c2s, mut j_se, mut c2_se) = (vec![], vec![], 0.0, 0.0);
+    let draws = 40;
+    for k in 0..draws {
+        let mut s = String::from("t\tforce\tvelocity\tacceleration\n");
+        let (mut w, dt) = (10.0f64, 0.005);
+        for i in 0..3000 {
+            let t = i as f64 * dt;
+            let q = 5.0 + 4.0 * (std::f64::consts::TAU * t / 2.0).sin();
+            let a = (q - c1 * w - c2 * w * w.abs()) / j;
+            s += &format!("{t}\t{q}\t{w}\t{}\n", a + sigma * gauss(&mut state));
+            w += a * dt;
+        }
+        let path = dir.path().join(format!("n{k}.tsv"));
+        std::fs::write(&path, s).unwrap();
+        let out = propid(
+            &[
+                "fit",
+                path.to_str().unwrap(),
+                "--c1-max",
+                "1",
+                "--format",
+                "json",
+            ],
+            None,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        js.push(v["mass"].as_f64().unwrap());
+        c2s.push(v["c2"].as_f64().unwrap());
+        j_se += v["mass_stderr"].as_f64().unwrap() / draws as f64;
+        c2_se += v["c2_stderr"].as_f64().unwrap() / draws as f64;
+    }
+    let spread = |x: &[f64]| {
+        let m = x.iter().sum::<f64>() / x.len() as f64;
+        (x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (x.len() - 1) as f64).sqrt()
+    };
+    for (name, x, se, truth) in [("J", &js, j_se, j), ("c2", &c2s, c2_se, c2)] {
+        let sd = spread(x);
+        let mean = x.iter().sum::<f64>() / x.len() as f64;
+        eprintln!("{name}: mean {mean}, scatter {sd}, reported stderr {se}");
+        assert!(
+            (0.7..1.4).contains(&(sd / se)),
+            "{name}: scatter {sd} vs reported standard error {se}"
+        );
+        // Unbiased: the mean of 40 fits is within 3 standard errors of the mean of the truth.
+        assert!(
+            (mean - truth).abs() < 3.0 * se / (draws as f64).sqrt(),
+            "{name}: mean {mean} vs {truth}"
+        );
+    }
 }
 
 #[test]

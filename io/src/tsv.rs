@@ -257,23 +257,46 @@ fn parse_field(field: &str) -> Option<f64> {
 pub struct TsvWriter<W: Write> {
     out: W,
     flush_each_row: bool,
+    extra_columns: usize,
 }
 
 impl<W: Write> TsvWriter<W> {
     /// Writes the header line.
-    pub fn new(mut out: W, flush_each_row: bool) -> std::io::Result<Self> {
-        writeln!(out, "{}", HEADER.join("\t"))?;
+    pub fn new(out: W, flush_each_row: bool) -> std::io::Result<Self> {
+        Self::with_extra_columns(out, flush_each_row, &[])
+    }
+
+    /// Writes the header line with `extra` columns after the standard ones (for example the
+    /// `command` an importer keeps); the reader ignores columns it does not know. Rows then go
+    /// through [`TsvWriter::write_with`].
+    pub fn with_extra_columns(
+        mut out: W,
+        flush_each_row: bool,
+        extra: &[&str],
+    ) -> std::io::Result<Self> {
+        let mut header = HEADER.join("\t");
+        for name in extra {
+            header.push('\t');
+            header.push_str(name);
+        }
+        writeln!(out, "{header}")?;
         if flush_each_row {
             out.flush()?;
         }
         Ok(TsvWriter {
             out,
             flush_each_row,
+            extra_columns: extra.len(),
         })
     }
 
     /// Writes one row. NaN is written as `nan` (the seed's Python prints the same).
     pub fn write(&mut self, row: &Row) -> std::io::Result<()> {
+        self.write_with(row, &[])
+    }
+
+    /// Writes one row and the values of the extra columns (NaN where one is missing).
+    pub fn write_with(&mut self, row: &Row, extra: &[f64]) -> std::io::Result<()> {
         let s = &row.sample;
         let fields = [
             row.ts_local,
@@ -283,8 +306,9 @@ impl<W: Write> TsvWriter<W> {
             s.acceleration,
             s.position,
         ];
+        let extra = (0..self.extra_columns).map(|k| extra.get(k).copied().unwrap_or(f64::NAN));
         let mut line = String::with_capacity(96);
-        for (i, v) in fields.iter().enumerate() {
+        for (i, v) in fields.into_iter().chain(extra).enumerate() {
             if i > 0 {
                 line.push('\t');
             }

@@ -47,6 +47,13 @@ pub struct Args {
     /// Noise seed of the simulated stand.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
+    /// address (the URL with its per-run token is printed on stderr).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    pub live: Option<String>,
+    /// Allow --live on an address other than loopback.
+    #[arg(long)]
+    pub live_allow_remote: bool,
 }
 
 /// Runs `propid demo`.
@@ -94,14 +101,28 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let tsv = args.out.join("run.tsv");
     let mut file =
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
-    let never = AtomicBool::new(false);
+    // Ctrl-C, or STOP on the live page, stops the drive with STANDBY as always.
+    let stop = Arc::new(AtomicBool::new(false));
+    crate::signals::install(&stop)?;
+    let mut live = crate::live::start_for_drive(
+        args.live.as_deref(),
+        args.live_allow_remote,
+        &stop,
+        excitation,
+        "propid demo",
+    )?;
     let outcome = run_drive(
         cfg,
         transport.as_mut(),
         &SystemClock,
-        &never,
+        &stop,
         &mut file,
-        &mut |e| crate::cmd::drive::print_event(e, &excitation, true),
+        &mut |e| {
+            crate::cmd::drive::print_event(e, &excitation, true);
+            if let Some((_, view)) = live.as_mut() {
+                view.on_event(e);
+            }
+        },
     );
     // Give the last STANDBY frames time to arrive before the simulated drive stops.
     std::thread::sleep(std::time::Duration::from_millis(100));
@@ -110,9 +131,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .join()
         .map_err(|_| anyhow::anyhow!("the simulated drive panicked"))?
         .map_err(anyhow::Error::msg)?;
-    if outcome.report.reason != StopReason::Completed {
-        anyhow::bail!("the drive stopped early: {}", outcome.report.reason);
-    }
     let standby_last =
         summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);
     eprintln!(
@@ -124,6 +142,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             "did NOT see STANDBY and a zero setpoint"
         }
     );
+    if outcome.report.reason != StopReason::Completed {
+        anyhow::bail!("the drive stopped early: {}", outcome.report.reason);
+    }
 
     // Fit, as the seed regressor would, and plot.
     let fit_options = FitOptions {

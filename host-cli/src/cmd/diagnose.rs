@@ -2,7 +2,6 @@
 
 use std::path::PathBuf;
 
-use anyhow::Context;
 use propid_science::diagnose::{
     diagnose_rows, read_rows, report_figure, to_text, Options, Verdict,
 };
@@ -66,8 +65,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         _ => None,
     };
     if let Some(path) = args.plot.as_ref().filter(|_| cannot_judge.is_none()) {
-        crate::plot::write(path, &report_figure(&report))
-            .with_context(|| format!("writing the plot {}", path.display()))?;
+        crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
     }
     let text = match args.format {

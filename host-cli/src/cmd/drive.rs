@@ -68,6 +68,22 @@ pub struct Args {
     /// Progress on stderr once a second.
     #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
     pub progress: bool,
+    /// Play a pattern file from `propid plan` (its range, period and duration) instead of
+    /// --pattern, --period and the setpoint range.
+    #[arg(long)]
+    pub pattern_file: Option<PathBuf>,
+    /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
+    /// most this many percent; the pattern duration is then the longest the run may take.
+    #[arg(long, value_name = "PCT")]
+    pub until_stderr: Option<f64>,
+    /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
+    /// address (loopback; the URL with its per-run token is printed on stderr).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+    pub live: Option<String>,
+    /// Allow --live on an address other than loopback (anyone who can reach it and has the token
+    /// can stop the drive).
+    #[arg(long)]
+    pub live_allow_remote: bool,
 }
 
 impl Args {
@@ -92,13 +108,9 @@ impl Args {
             "feedback id",
         )?;
         let (lo, hi) = parse_lo_hi(&self.setpoint_rat_lo_hi)?;
-        let cfg = DriveConfig {
-            node_id,
-            mtu: self.bus.mtu,
-            readiness_id: self.readiness_id,
-            setpoint_id,
-            feedback_id,
-            excitation: Excitation {
+        let excitation = match &self.pattern_file {
+            Some(path) => crate::cmd::sim::read_pattern_file(path)?,
+            None => Excitation {
                 lo,
                 hi,
                 period: self.period,
@@ -106,10 +118,28 @@ impl Args {
                 init_duration: self.init_duration,
                 pattern: self.pattern,
             },
+        };
+        let until_rel_stderr = match self.until_stderr {
+            Some(p) if p > 0.0 && p < 100.0 => Some(p / 100.0),
+            Some(p) => {
+                return Err(InputError(format!(
+                    "--until-stderr must be a percentage in (0, 100) (got {p})"
+                )))
+            }
+            None => None,
+        };
+        let cfg = DriveConfig {
+            node_id,
+            mtu: self.bus.mtu,
+            readiness_id: self.readiness_id,
+            setpoint_id,
+            feedback_id,
+            excitation,
             setpoint_period: self.setpoint_period,
             deadman: self.deadman,
             drive_node_id: self.drive_node_id,
-            fit: self.fit,
+            fit: self.fit || until_rel_stderr.is_some(),
+            until_rel_stderr,
         };
         cfg.validate().map_err(flag_error)?;
         Ok(cfg)
@@ -209,13 +239,25 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let excitation = cfg.excitation;
     let readiness = cfg.readiness_id.is_some();
     let fit = cfg.fit;
+    let mut live = crate::live::start_for_drive(
+        args.live.as_deref(),
+        args.live_allow_remote,
+        &stop,
+        excitation,
+        "propid drive",
+    )?;
     let outcome = run_drive(
         cfg,
         transport.as_mut(),
         &SystemClock,
         &stop,
         &mut out,
-        &mut |e| print_event(e, &excitation, args.progress),
+        &mut |e| {
+            print_event(e, &excitation, args.progress);
+            if let Some((_, view)) = live.as_mut() {
+                view.on_event(e);
+            }
+        },
     );
     let r = &outcome.report;
     let delivered = if outcome.standby_delivered(readiness) {
@@ -247,7 +289,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     match &r.reason {
-        StopReason::Completed if outcome.standby_delivered(readiness) => Ok(()),
+        StopReason::Completed | StopReason::Precise { .. }
+            if outcome.standby_delivered(readiness) =>
+        {
+            Ok(())
+        }
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
         StopReason::Signal => std::process::exit(130),
         reason => anyhow::bail!("{reason}"),

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use propid_io::import::{import_autoquad, import_rcbench, write_tsv, Imported};
+use propid_io::import::{import_autoquad, import_rcbench, write_tsv, Imported, RcbenchOptions};
 
 /// The importers.
 #[derive(clap::Subcommand, Debug)]
@@ -12,17 +12,20 @@ pub enum Command {
     Autoquad {
         /// The ESC32 Configuration Utility CSV.
         file: PathBuf,
-        /// The motor's kv [rpm/V] (gives Kt = 60/(2π·kv) N·m/A).
+        /// The motor's kv [rpm/V] (gives Kt = 60/(2π·kv) N·m/A); finite and positive.
         #[arg(long)]
         kv: f64,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
-    /// RCbenchmark (Tyto Robotics) stand log: load-cell torque and electrical rpm.
+    /// RCbenchmark or Tyto Robotics stand log: load-cell torque, optical or electrical rpm, ESC signal.
     Rcbench {
-        /// The RCbenchmark CSV export.
+        /// The RCbenchmark / Tyto CSV export.
         file: PathBuf,
+        /// Subtract the torque measured at zero speed (the load cell's zero offset) from every sample.
+        #[arg(long)]
+        subtract_zero_offset: bool,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -39,7 +42,12 @@ fn write(imported: &Imported, output: Option<&Path>) -> anyhow::Result<()> {
         )),
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
-    write_tsv(imported, out)?;
+    write_tsv(imported, out).with_context(|| {
+        format!(
+            "writing {}",
+            output.map_or("standard output".into(), |p| p.display().to_string())
+        )
+    })?;
     eprintln!("import: {} rows", imported.rows.len());
     Ok(())
 }
@@ -48,8 +56,22 @@ fn write(imported: &Imported, output: Option<&Path>) -> anyhow::Result<()> {
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
         Command::Autoquad { file, kv, output } => {
-            write(&import_autoquad(&file, kv)?, output.as_deref())
+            let imported = import_autoquad(&file, kv)
+                .map_err(|e| crate::InputError(e.0.replace("kv must", "--kv must")))?;
+            write(&imported, output.as_deref())
         }
-        Command::Rcbench { file, output } => write(&import_rcbench(&file)?, output.as_deref()),
+        Command::Rcbench {
+            file,
+            subtract_zero_offset,
+            output,
+        } => write(
+            &import_rcbench(
+                &file,
+                &RcbenchOptions {
+                    subtract_zero_offset,
+                },
+            )?,
+            output.as_deref(),
+        ),
     }
 }

@@ -606,10 +606,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )),
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
-    let mut writer = TsvWriter::new(out, false)?;
+    let out_name = args
+        .output
+        .as_ref()
+        .map_or("standard output".into(), |p| p.display().to_string());
+    let writing = || format!("writing {out_name}");
+    let mut writer = TsvWriter::new(out, false).with_context(writing)?;
     let mut stand = Stand::new(config, args.stand.seed);
-    let rows = stand.run(&excitation, |row| writer.write(&row))?;
-    writer.into_inner()?;
+    let rows = stand
+        .run(&excitation, |row| writer.write(&row))
+        .with_context(writing)?;
+    writer.into_inner().with_context(writing)?;
     eprintln!(
         "simulated {rows} rows ({} s at {} Hz)",
         excitation.duration, config.rate

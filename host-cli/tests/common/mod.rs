@@ -1,4 +1,4 @@
-//! Shared helpers for the CLI tests: run the `propid` binary, find the repo, check for Python.
+//! Shared helpers for the CLI tests: run the `propid` binary, find the repo, require Python packages or socat.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -32,22 +32,41 @@ pub fn propid(args: &[&str], stdin: Option<&[u8]>) -> Output {
     child.wait_with_output().unwrap()
 }
 
-/// True if `python3` can import the given modules. In CI a missing module is a failure; on a
-/// developer machine the caller skips loudly.
-pub fn python_has(modules: &str) -> bool {
+/// Panics unless `python3` can import the given modules. The tests that call this are
+/// `#[ignore = "needs …"]`: they run only when asked (`cargo test … -- --ignored`, as
+/// ci/steps/30-python-peers.sh does after ci/setup.sh installed the packages), and then a missing
+/// package is a failure, never a silent `ok`.
+pub fn require_python(modules: &str) {
     let ok = Command::new("python3")
         .args(["-c", &format!("import {modules}")])
         .stderr(Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
-    if !ok {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI must provide python3 with {modules} (pip install)"
-        );
-        eprintln!("SKIPPED: python3 with {modules} is not available");
-    }
-    ok
+    assert!(
+        ok,
+        "this test needs python3 with {modules}: run `bash ci/setup.sh` (pip install) first"
+    );
+}
+
+/// Panics unless the `socat` program runs (see [`require_python`]).
+pub fn require_socat() {
+    let ok = Command::new("socat")
+        .arg("-V")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok,
+        "this test needs socat: run `bash ci/setup.sh` (apt) first"
+    );
+}
+
+/// Kept for `pycyphal_interop.rs` until it calls [`require_python`]: never returns `false`
+/// (a missing module panics instead of skipping).
+pub fn python_has(modules: &str) -> bool {
+    require_python(modules);
+    true
 }
 
 /// A YAML `key: value` line's value.

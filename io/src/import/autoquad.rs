@@ -2,53 +2,211 @@
 
 use std::path::Path;
 
-use super::{column, differentiate, number, open_csv, Imported};
+use super::{column, csv_reader, differentiate, mean_sd, number, open_csv, Imported, UpdateRate};
 use crate::tsv::{Row, Sample};
 use crate::InputError;
 
-/// Imports an ESC32 log. `kv` [rpm/V] gives Kt = 60/(2π·kv).
-pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
-    if kv.is_nan() || kv <= 0.0 {
-        return Err(InputError(format!("--kv must be positive (got {kv})")));
+/// `YYYY-MM-DD HH:MM:SS:mmm` (the utility's PC timestamp) → seconds since the start of its day
+/// count (days from the date, so midnight is crossed correctly). `None` if it is not that form.
+fn pc_time(text: &str) -> Option<f64> {
+    let (date, time) = text.trim().split_once(' ')?;
+    let d: Vec<i64> = date
+        .split('-')
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    let t: Vec<f64> = time
+        .split(':')
+        .map(|x| x.parse().ok())
+        .collect::<Option<_>>()?;
+    if d.len() != 3 || t.len() != 4 {
+        return None;
     }
-    let (mut reader, headers, file) = open_csv(path)?;
-    let (amps, rpm, duty) = (
-        column(&headers, "Amps", &file)?,
-        column(&headers, "RPM", &file)?,
-        column(&headers, "Duty", &file)?,
-    );
+    // Days since a fixed epoch (civil calendar; exact for the Gregorian dates a log has).
+    let (y, m) = if d[1] <= 2 {
+        (d[0] - 1, d[1] + 9)
+    } else {
+        (d[0], d[1] - 3)
+    };
+    let days = 365 * y + y / 4 - y / 100 + y / 400 + (153 * m + 2) / 5 + d[2];
+    Some(days as f64 * 86_400.0 + t[0] * 3600.0 + t[1] * 60.0 + t[2] + t[3] * 1e-3)
+}
+
+/// Imports an ESC32 log. `kv` [rpm/V] gives Kt = 60/(2π·kv); it must be finite and positive.
+pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
+    check_kv(kv)?;
+    let (reader, headers, file) = open_csv(path)?;
+    autoquad(reader, headers, file, kv)
+}
+
+/// [`import_autoquad`] from any reader; `name` names it in messages.
+pub fn read_autoquad(
+    input: impl std::io::Read,
+    name: &str,
+    kv: f64,
+) -> Result<Imported, InputError> {
+    check_kv(kv)?;
+    let (reader, headers, file) = csv_reader(Box::new(input), name.to_owned())?;
+    autoquad(reader, headers, file, kv)
+}
+
+fn check_kv(kv: f64) -> Result<(), InputError> {
+    if !kv.is_finite() || kv <= 0.0 {
+        return Err(InputError(format!(
+            "kv must be a finite positive number of rpm/V (got {kv})"
+        )));
+    }
+    Ok(())
+}
+
+fn autoquad(
+    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    headers: csv::StringRecord,
+    file: String,
+    kv: f64,
+) -> Result<Imported, InputError> {
+    let (stamp, _) = column(&headers, &["Timestamp"], &file)?;
+    let (amps, amps_name) = column(&headers, &["Amps"], &file)?;
+    let (rpm, rpm_name) = column(&headers, &["RPM"], &file)?;
+    let (duty, duty_name) = column(&headers, &["Duty"], &file)?;
     let kt = 60.0 / (std::f64::consts::TAU * kv);
-    let mut rows = Vec::new();
+    // (PC time, bus current, rpm, duty in %)
+    let mut raw: Vec<(f64, f64, f64, f64)> = Vec::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
         let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
-        let i_bus = number(&record, amps, "Amps", &file, line)?;
-        let r = number(&record, rpm, "RPM", &file, line)?;
-        let d = number(&record, duty, "Duty", &file, line)? / 100.0;
+        let text = record.get(stamp).unwrap_or("");
+        let pc = pc_time(text).ok_or_else(|| {
+            InputError(format!(
+                "{file}: line {line}, column `Timestamp`: `{text}` is not YYYY-MM-DD HH:MM:SS:mmm"
+            ))
+        })?;
+        raw.push((
+            pc,
+            number(&record, amps, &amps_name, &file, line)?,
+            number(&record, rpm, &rpm_name, &file, line)?,
+            number(&record, duty, &duty_name, &file, line)?,
+        ));
+    }
+    let n = raw.len();
+    if n < 2 {
+        return Err(InputError(format!(
+            "{file}: {n} data rows; at least 2 are needed"
+        )));
+    }
+    // The time base: the ESC logs at a fixed rate while the PC stamps rows in bursts, so the
+    // row interval is the least-squares slope of PC time against row index.
+    let (mi, mt) = (
+        (n - 1) as f64 / 2.0,
+        raw.iter().map(|r| r.0 - raw[0].0).sum::<f64>() / n as f64,
+    );
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for (k, r) in raw.iter().enumerate() {
+        sxy += (k as f64 - mi) * (r.0 - raw[0].0 - mt);
+        sxx += (k as f64 - mi).powi(2);
+    }
+    let dt = sxy / sxx;
+    if !(1e-5..=1.0).contains(&dt) {
+        return Err(InputError(format!(
+            "{file}: column `Timestamp`: the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
+        )));
+    }
+    let scatter = raw
+        .iter()
+        .enumerate()
+        .map(|(k, r)| (r.0 - raw[0].0 - mt - dt * (k as f64 - mi)).abs())
+        .fold(0.0, f64::max);
+
+    let mut rows = Vec::with_capacity(n);
+    let mut command = Vec::with_capacity(n);
+    for (k, &(_, i_bus, r, d)) in raw.iter().enumerate() {
+        let d = d / 100.0;
         // Phase current ≈ I_bus / duty; undefined at zero duty.
         let force = if d > 0.0 { kt * i_bus / d } else { f64::NAN };
         rows.push(Row {
             ts_local: f64::NAN,
             sample: Sample {
-                t: k as f64 * 0.010,
+                t: k as f64 * dt,
                 force,
                 velocity: r * std::f64::consts::TAU / 60.0,
                 acceleration: f64::NAN,
                 position: f64::NAN,
             },
         });
-    }
-    if rows.is_empty() {
-        return Err(InputError(format!("{file}: no data rows")));
+        command.push(d * 100.0);
     }
     differentiate(&mut rows);
+
+    // What the signals do, measured.
+    let rate = |col: usize| {
+        UpdateRate::measure(
+            raw.iter()
+                .enumerate()
+                .map(|(k, r)| (k as f64 * dt, [r.1, r.2, r.3][col])),
+        )
+        .describe(n)
+    };
+    let top = rows
+        .iter()
+        .map(|r| r.sample.velocity.abs())
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    let rest: Vec<f64> = raw
+        .iter()
+        .filter(|r| r.2 == 0.0 && r.1.is_finite())
+        .map(|r| r.1)
+        .collect();
+    let steady: Vec<f64> = rows
+        .iter()
+        .filter(|r| {
+            r.sample.force.is_finite()
+                && r.sample.velocity.abs() > 0.5 * top
+                && r.sample.acceleration.abs() < 0.1 * top
+        })
+        .map(|r| r.sample.force * r.sample.velocity.signum())
+        .collect();
+    let steady_mean = if steady.is_empty() {
+        f64::NAN
+    } else {
+        mean_sd(&steady).0
+    };
+    let sign = if steady_mean < 0.0 { -1.0 } else { 1.0 };
+    for r in &mut rows {
+        r.sample.force *= sign;
+    }
+    let mut assumptions = vec![
+        format!(
+            "time = row index × {:.4} ms: the least-squares slope of the PC timestamps against the row index over {n} rows ({:.1} s); the PC timestamps scatter by up to {:.0} ms around that line, so they are not used row by row",
+            dt * 1e3,
+            dt * (n - 1) as f64,
+            scatter * 1e3
+        ),
+        format!("torque = Kt·I_bus/duty with Kt = 60/(2π·kv) = {kt:.4e} N·m/A (nominal, from kv): phase current ≈ bus current / duty; NaN at zero duty; this torque includes the motor's own friction"),
+        format!("`{amps_name}` (bus current) {}", rate(0)),
+        format!("velocity = `{rpm_name}`·2π/60 (mechanical rpm from the commutation period); it {}", rate(1)),
+        format!("command = `{duty_name}` [%] (the duty the ESC applied), kept as the TSV column `command`; it {}", rate(2)),
+        "acceleration = central difference of the velocity (no smoothing)".into(),
+    ];
+    assumptions.push(if steady.is_empty() {
+        "torque sign kept as logged: no sample at a steady speed above half the top speed to check it against".into()
+    } else if sign < 0.0 {
+        format!("torque sign flipped: at steady speed ({} samples) Kt·I_bus/duty averaged {steady_mean:.4} N·m against the rotation; drag opposes rotation, so the torque that holds the speed is taken as positive", steady.len())
+    } else {
+        format!("torque sign kept: at steady speed ({} samples) Kt·I_bus/duty averaged +{steady_mean:.4} N·m with the rotation, as drag requires", steady.len())
+    });
+    assumptions.push(if rest.len() >= 2 {
+        let (m, sd) = mean_sd(&rest);
+        format!(
+            "zero offset: at zero speed ({} rows) the bus current reads {:+.1} ± {:.1} mA (mean ± s.d.); not subtracted",
+            rest.len(),
+            m * 1e3,
+            sd * 1e3
+        )
+    } else {
+        "zero offset: no rows at zero speed, so the current sensor's zero cannot be checked".into()
+    });
     Ok(Imported {
         rows,
-        assumptions: vec![
-            "time = row index × 10.00 ms (the PC timestamp jitters by ±0.1 s; a fit of time against index gives 10.00 ms per row)".into(),
-            format!("torque = Kt·I_bus/duty with Kt = 60/(2π·kv) = {kt:.4e} N·m/A: phase current ≈ bus current / duty; NaN at zero duty; this torque includes the motor's own friction"),
-            "velocity = RPM·2π/60 (mechanical rpm from the commutation period)".into(),
-            "acceleration = central difference of the velocity (no smoothing)".into(),
-        ],
+        command: Some(command),
+        assumptions,
     })
 }

@@ -1,14 +1,24 @@
 //! Importers: measured logs from other test stands into propid's TSV.
 //!
 //! ```text
-//!  AutoQuad ESC32 telemetry (CSV) ─► t = row × 10 ms, ω = rpm·2π/60, Q = Kt·I_bus/duty ─┐
-//!  RCbenchmark log (CSV)          ─► t, ω = rpm·2π/60, Q = load-cell torque (sparse)  ─┴─► TSV
-//!                                    acceleration = central difference of ω (both)
+//!  AutoQuad ESC32 telemetry (CSV)  ─► t = row × (fitted row interval), ω = rpm·2π/60, Q = Kt·I_bus/duty ─┐
+//!  RCbenchmark / Tyto log (CSV)    ─► t, ω = rpm·2π/60 (optical or electrical), Q = load-cell torque    ─┴─► TSV
+//!                                     acceleration = central difference of ω; command kept as a column
 //! ```
-//! Importers convert units and say what they assume (in [`Imported::assumptions`], which the command prints). They
-//! never smooth, shift or filter a signal, so what `diagnose` finds is in the data. The one
+//! Importers convert units and report what they measured and assumed (in
+//! [`Imported::assumptions`], which the command prints): how often each signal really updates,
+//! the torque's sign convention (at steady speed drag opposes rotation), the torque seen at zero
+//! speed (a zero offset, reported and subtracted only when asked), the time base. No message
+//! states a fact of one particular data set: every figure in them is computed from the file.
+//! They never smooth, shift or filter a signal, so what `diagnose` finds is in the data. The one
 //! derived column is the acceleration, a plain central difference of the measured velocity
-//! ((ω[k+1] − ω[k−1]) / (t[k+1] − t[k−1])), because neither stand logs one.
+//! ((ω[k+1] − ω[k−1]) / (t[k+1] − t[k−1])), because neither stand logs one. The command the
+//! stand gave (ESC signal, duty) is kept as an extra TSV column `command`: the input is evidence
+//! too.
+//!
+//! Bad input is an [`InputError`] naming the file, the line and the column: a field that is not
+//! a number, or a row too short to have the column at all. An empty field is a missing sample
+//! (NaN): stands log sensors at different rates and leave the others empty.
 
 mod autoquad;
 mod rcbench;
@@ -18,14 +28,17 @@ use std::path::Path;
 use crate::tsv::{Row, TsvWriter};
 use crate::InputError;
 
-pub use autoquad::import_autoquad;
-pub use rcbench::import_rcbench;
+pub use autoquad::{import_autoquad, read_autoquad};
+pub use rcbench::{import_rcbench, read_rcbench, RcbenchOptions};
 
-/// An imported recording: the rows and what was assumed.
+/// An imported recording: the rows, the command column and what was measured and assumed.
 pub struct Imported {
     /// Rows in time order.
     pub rows: Vec<Row>,
-    /// Assumptions and conversions, one sentence each.
+    /// The command the stand gave at each row (ESC signal, duty…; NaN where not logged), when
+    /// the log has one. Its unit is stated in [`Imported::assumptions`].
+    pub command: Option<Vec<f64>>,
+    /// Measurements, assumptions and conversions, one sentence each.
     pub assumptions: Vec<String>,
 }
 
@@ -48,44 +61,154 @@ pub(crate) fn differentiate(rows: &mut [Row]) {
     }
 }
 
+/// How often a signal really updates: the samples present and the median interval between
+/// consecutive changes of value. `None` for the interval when it never changes twice.
+pub(crate) struct UpdateRate {
+    /// Rows where the signal has a value.
+    pub present: usize,
+    /// Median time between changes of value [s].
+    pub interval: Option<f64>,
+}
+
+impl UpdateRate {
+    pub(crate) fn measure(samples: impl Iterator<Item = (f64, f64)>) -> UpdateRate {
+        let mut present = 0;
+        let mut last: Option<(f64, f64)> = None;
+        let mut intervals = Vec::new();
+        for (t, v) in samples {
+            if !v.is_finite() {
+                continue;
+            }
+            present += 1;
+            match last {
+                Some((_, lv)) if lv == v => {}
+                Some((lt, _)) => {
+                    intervals.push(t - lt);
+                    last = Some((t, v));
+                }
+                None => last = Some((t, v)),
+            }
+        }
+        UpdateRate {
+            present,
+            interval: median(&mut intervals),
+        }
+    }
+
+    /// "updates at 44.8 Hz (median interval 22.3 ms), in 812 of 4814 rows (17 %)".
+    pub(crate) fn describe(&self, rows: usize) -> String {
+        let share = format!(
+            "{} of {rows} rows ({:.0} %)",
+            self.present,
+            100.0 * self.present as f64 / rows.max(1) as f64
+        );
+        match self.interval {
+            Some(dt) if dt > 0.0 => format!(
+                "updates at {:.3} Hz (median interval between changes {:.1} ms), present in {share}",
+                1.0 / dt,
+                dt * 1e3
+            ),
+            _ => format!("never changes value; present in {share}"),
+        }
+    }
+}
+
+/// The median (NaN-free input), `None` when empty.
+pub(crate) fn median(x: &mut [f64]) -> Option<f64> {
+    if x.is_empty() {
+        return None;
+    }
+    x.sort_by(f64::total_cmp);
+    let n = x.len();
+    Some(if n % 2 == 1 {
+        x[n / 2]
+    } else {
+        0.5 * (x[n / 2 - 1] + x[n / 2])
+    })
+}
+
+/// Mean and sample standard deviation.
+pub(crate) fn mean_sd(x: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let m = x.iter().sum::<f64>() / n;
+    let var = x.iter().map(|v| (v - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
+    (m, var.sqrt())
+}
+
+/// A CSV reader over some input, its header line, and the input's name for messages.
+pub(crate) type Csv<'a> = (
+    csv::Reader<Box<dyn std::io::Read + 'a>>,
+    csv::StringRecord,
+    String,
+);
+
 /// Opens a CSV log: the reader, its header and the file name for messages.
-pub(crate) fn open_csv(
-    path: &Path,
-) -> Result<(csv::Reader<std::fs::File>, csv::StringRecord, String), InputError> {
+pub(crate) fn open_csv(path: &Path) -> Result<Csv<'static>, InputError> {
     let file = path.display().to_string();
-    let mut reader = csv::ReaderBuilder::new()
-        .flexible(true)
-        .from_path(path)
-        .map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
+    let f =
+        std::fs::File::open(path).map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
+    csv_reader(Box::new(f), file)
+}
+
+/// A CSV reader over any input (named `name` in messages), with its header.
+pub(crate) fn csv_reader(
+    input: Box<dyn std::io::Read + '_>,
+    name: String,
+) -> Result<Csv<'_>, InputError> {
+    let mut reader = csv::ReaderBuilder::new().flexible(true).from_reader(input);
     let headers = reader
         .headers()
-        .map_err(|e| InputError(format!("{file}: line 1: {e}")))?
+        .map_err(|e| InputError(format!("{name}: line 1: {e}")))?
         .clone();
-    Ok((reader, headers, file))
+    Ok((reader, headers, name))
 }
 
-/// Finds a column by exact header name (a UTF-8 byte-order mark on the first is ignored).
+/// A header name compared loosely: no byte-order mark, lower case, `µ`/`μ` as `u`, and no
+/// spaces, `·`, `-` or `.` (so `Torque (N·m)`, `Torque (N-m)` and `torque (Nm)` are one name).
+pub(crate) fn loose(name: &str) -> String {
+    name.trim_start_matches('\u{feff}')
+        .to_lowercase()
+        .replace(['µ', 'μ'], "u")
+        .chars()
+        .filter(|c| !matches!(c, ' ' | '·' | '-' | '.' | '\u{22c5}'))
+        .collect()
+}
+
+/// The first of `names` (compared loosely) that the header has: its index and the header's own
+/// spelling.
+pub(crate) fn find_column(headers: &csv::StringRecord, names: &[&str]) -> Option<(usize, String)> {
+    names.iter().find_map(|name| {
+        let want = loose(name);
+        headers.iter().position(|h| loose(h) == want).map(|i| {
+            (
+                i,
+                headers[i].trim_start_matches('\u{feff}').trim().to_owned(),
+            )
+        })
+    })
+}
+
+/// Finds a column by name (see [`find_column`]) or says which columns the file has.
 pub(crate) fn column(
     headers: &csv::StringRecord,
-    name: &str,
+    names: &[&str],
     file: &str,
-) -> Result<usize, InputError> {
-    headers
-        .iter()
-        .position(|h| h.trim_start_matches('\u{feff}').trim() == name)
-        .ok_or_else(|| {
-            InputError(format!(
-                "{file}: line 1: no column `{name}` (columns: {})",
-                headers
-                    .iter()
-                    .map(|h| h.trim_start_matches('\u{feff}'))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ))
-        })
+) -> Result<(usize, String), InputError> {
+    find_column(headers, names).ok_or_else(|| {
+        InputError(format!(
+            "{file}: line 1: no column `{}` (columns: {})",
+            names.join("` or `"),
+            headers
+                .iter()
+                .map(|h| h.trim_start_matches('\u{feff}'))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    })
 }
 
-/// Parses a CSV field: a number, or NaN when empty.
+/// Parses a CSV field: a number, or NaN when empty. A row too short to have the field is an
+/// error, like a field that is not a number.
 pub(crate) fn number(
     record: &csv::StringRecord,
     index: usize,
@@ -93,7 +216,14 @@ pub(crate) fn number(
     file: &str,
     line: u64,
 ) -> Result<f64, InputError> {
-    let text = record.get(index).unwrap_or("").trim();
+    let Some(text) = record.get(index) else {
+        return Err(InputError(format!(
+            "{file}: line {line}, column `{name}`: missing (the row has {} fields, the column is field {})",
+            record.len(),
+            index + 1
+        )));
+    };
+    let text = text.trim();
     if text.is_empty() {
         return Ok(f64::NAN);
     }
@@ -104,11 +234,22 @@ pub(crate) fn number(
     })
 }
 
-/// Writes an imported recording as propid's TSV.
+/// Writes an imported recording as propid's TSV (with a `command` column when it has one).
 pub fn write_tsv<W: std::io::Write>(imported: &Imported, out: W) -> std::io::Result<W> {
-    let mut w = TsvWriter::new(out, false)?;
-    for r in &imported.rows {
-        w.write(r)?;
+    match &imported.command {
+        Some(command) => {
+            let mut w = TsvWriter::with_extra_columns(out, false, &["command"])?;
+            for (r, c) in imported.rows.iter().zip(command) {
+                w.write_with(r, &[*c])?;
+            }
+            w.into_inner()
+        }
+        None => {
+            let mut w = TsvWriter::new(out, false)?;
+            for r in &imported.rows {
+                w.write(r)?;
+            }
+            w.into_inner()
+        }
     }
-    w.into_inner()
 }

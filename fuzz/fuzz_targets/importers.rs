@@ -1,0 +1,38 @@
+//! Fuzz the importers (RCbenchmark/Tyto and ESC32 CSV): any bytes give an import or an error
+//! naming the input, never a panic; an import has strictly increasing time, one command per row,
+//! and its TSV is written.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+use propid_io::import::{read_autoquad, read_rcbench, write_tsv, Imported, RcbenchOptions};
+
+fn check(result: Result<Imported, propid_io::InputError>) {
+    match result {
+        Ok(im) => {
+            assert!(im.rows.windows(2).all(|w| w[1].sample.t > w[0].sample.t));
+            if let Some(c) = &im.command {
+                assert_eq!(c.len(), im.rows.len());
+            }
+            write_tsv(&im, std::io::sink()).unwrap();
+        }
+        Err(e) => assert!(e.0.contains("fuzz.csv") || e.0.contains("kv"), "{e}"),
+    }
+}
+
+fuzz_target!(|bytes: &[u8]| {
+    // The first byte picks the importer and its option; the rest is the file.
+    let Some((&which, csv)) = bytes.split_first() else {
+        return;
+    };
+    match which % 3 {
+        0 => check(read_rcbench(csv, "fuzz.csv", &RcbenchOptions::default())),
+        1 => check(read_rcbench(
+            csv,
+            "fuzz.csv",
+            &RcbenchOptions {
+                subtract_zero_offset: true,
+            },
+        )),
+        _ => check(read_autoquad(csv, "fuzz.csv", 1600.0)),
+    }
+});
