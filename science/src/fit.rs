@@ -32,9 +32,10 @@ pub struct FitOptions {
     pub mass_min: f64,
     /// Largest (rotational) mass.
     pub mass_max: f64,
-    /// Largest viscous coefficient c1; 0 (the seed's default) forbids viscous friction.
+    /// Largest viscous coefficient c1; 0 (the seed's default) forbids viscous friction, infinity
+    /// leaves it unbounded.
     pub c1_max: f64,
-    /// Largest quadratic drag coefficient c2.
+    /// Largest quadratic drag coefficient c2 (infinity: unbounded).
     pub c2_max: f64,
     /// Propeller diameter [m], to report the torque coefficient C_Q.
     pub diameter: Option<f64>,
@@ -60,7 +61,7 @@ impl FitOptions {
     /// Checks the bounds and the propeller's geometry once, before any data is read.
     pub fn check(&self) -> Result<(), InputError> {
         let b = self;
-        if !(b.mass_min > 0.0 && b.mass_min <= b.mass_max && !b.mass_max.is_nan()) {
+        if !(b.mass_min > 0.0 && b.mass_min.is_finite() && b.mass_min <= b.mass_max) {
             return Err(InputError(format!(
                 "mass bounds must satisfy 0 < mass_min ≤ mass_max (got {} and {})",
                 b.mass_min, b.mass_max
@@ -139,6 +140,29 @@ pub struct Window {
     pub last: u64,
     /// Data rows in the file.
     pub rows: u64,
+    /// Rows with finite t, force, velocity and acceleration in the whole file.
+    pub complete: u64,
+    /// First row of the last run of complete rows (the seed keeps only that run).
+    pub run_start: u64,
+    /// The incomplete row that ended the previous run, if complete rows came before it:
+    /// (1-based line, column name).
+    pub breaker: Option<(u64, &'static str)>,
+}
+
+impl Window {
+    /// Complete rows the seed's trimming drops because an incomplete row came after them.
+    pub fn dropped_complete(&self) -> u64 {
+        self.complete - (self.last - self.run_start + 1)
+    }
+}
+
+/// The first of t, force, velocity, acceleration that is not finite.
+fn first_non_finite(s: &Sample) -> &'static str {
+    let names = ["t", "force", "velocity", "acceleration"];
+    let v = [s.t, s.force, s.velocity, s.acceleration];
+    (0..4)
+        .find(|i| !v[*i].is_finite())
+        .map_or("t", |i| names[i])
 }
 
 fn is_complete(s: &Sample) -> bool {
@@ -152,6 +176,9 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
     let mut last_valid = [None::<u64>; 4];
     let mut run_start = None::<u64>;
     let mut run_end = None::<u64>;
+    let mut complete = 0u64;
+    let mut last_incomplete = None::<(u64, &'static str)>;
+    let mut breaker = None;
     while let Some(row) = reader.next_row()? {
         let i = rows;
         rows += 1;
@@ -167,8 +194,12 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
         if is_complete(&s) {
             if run_end != Some(i.wrapping_sub(1)) || run_start.is_none() {
                 run_start = Some(i);
+                breaker = if complete > 0 { last_incomplete } else { None };
             }
             run_end = Some(i);
+            complete += 1;
+        } else {
+            last_incomplete = Some((reader.line_number(), first_non_finite(&s)));
         }
     }
     if rows == 0 {
@@ -189,7 +220,14 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
     // All rows after max_valid lack a value, so the last complete run ends at or before it.
     let last = end.min(max_valid);
     let first = start + (0.1 * (last - start) as f64) as u64;
-    Ok(Window { first, last, rows })
+    Ok(Window {
+        first,
+        last,
+        rows,
+        complete,
+        run_start: start,
+        breaker,
+    })
 }
 
 /// Fits a TSV file with the seed's trimming and bounds. Returns the report and a decimated copy
@@ -217,10 +255,14 @@ pub fn fit_path(
     let keep_every = ((window.last - window.first + 1) / 4000).max(1);
     let mut kept = Vec::new();
     let mut i = 0u64;
+    let mut overflow = None;
     while let Some(row) = reader.next_row()? {
         if i >= window.first && i <= window.last {
             let s = row.sample;
             estimator.update(s.force, s.velocity, s.acceleration);
+            if overflow.is_none() && !sums_finite(&estimator) {
+                overflow = Some((reader.line_number(), s));
+            }
             if (i - window.first) % keep_every == 0 {
                 kept.push(s);
             }
@@ -234,9 +276,34 @@ pub fn fit_path(
         }
     }
     progress(size, size);
+    if let Some((line, s)) = overflow {
+        return Err(overflow_error(&name, line, &s).into());
+    }
     let report = report_of(&estimator, options, window, &name)?;
     Ok((report, kept))
 }
+
+/// True if every sum of the normal equations is finite.
+fn sums_finite(estimator: &LoadEstimator<f64>) -> bool {
+    let e = estimator.equations();
+    e.matrix().iter().flatten().all(|v| v.is_finite())
+        && e.vector().iter().all(|v| v.is_finite())
+        && e.sum_y_squared().is_finite()
+}
+
+/// The error for the row at which the sums stop being finite.
+fn overflow_error(name: &str, line: u64, s: &Sample) -> InputError {
+    InputError(format!(
+        "{name}: line {line}: the sums of squares overflow a 64-bit float at this row \
+         (force {:e}, velocity {:e}, acceleration {:e}): a value this large is not a measurement; \
+         remove the row or rescale the data",
+        s.force, s.velocity, s.acceleration
+    ))
+}
+
+/// Condition numbers above this mean the regressors are linearly dependent to within rounding:
+/// any printed estimate would be an artefact of the arithmetic.
+const UNIDENTIFIABLE_CONDITION: f64 = 1e15;
 
 fn report_of(
     estimator: &LoadEstimator<f64>,
@@ -253,11 +320,15 @@ fn report_of(
             window.rows
         )));
     }
+    // An infinite c1_max or c2_max means "unbounded": the bound rows are `c·θ₀ ≤ θ` and an
+    // infinite coefficient makes them NaN, so a finite stand-in far beyond any physical drag is
+    // used (θ₀ = 1/J ≤ 1/mass_min keeps every product finite).
+    let unbounded = |c: f64| if c.is_infinite() { 1e150 } else { c };
     let bounds = LoadBounds {
         mass_min: args.mass_min,
         mass_max: args.mass_max,
-        c1_max: args.c1_max,
-        c2_max: args.c2_max,
+        c1_max: unbounded(args.c1_max),
+        c2_max: unbounded(args.c2_max),
     };
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
@@ -272,7 +343,24 @@ fn report_of(
         )),
         SolveError::Infeasible => InputError(format!("{name}: the bounds admit no solution")),
     })?;
+    if est.condition_number.is_nan() || est.condition_number >= UNIDENTIFIABLE_CONDITION {
+        return Err(InputError(format!(
+            "{name}: cannot judge: the data cannot identify the mass, c1 and c2 (condition number \
+             {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}..={} \
+             (e.g. a constant velocity); record with a torque that varies the speed",
+            est.condition_number,
+            window.first + 1,
+            window.last + 1
+        )));
+    }
     let mut warnings = Vec::new();
+    if let Some((line, column)) = window.breaker {
+        warnings.push(format!(
+            "{} complete rows dropped by the seed's trimming: line {line} has a non-finite \
+             `{column}`, and the seed fits only the last run of complete rows (after it)",
+            window.dropped_complete()
+        ));
+    }
     if est.condition_number > 1e8 {
         let rel = [
             est.mass_stderr / est.mass.abs(),
@@ -314,24 +402,49 @@ fn report_of(
     })
 }
 
-/// The report as the seed's YAML (same keys and unit comments), plus propid's extras.
+/// A float as YAML 1.1 reads it as a float (PyYAML's resolver): a mantissa with a point and a
+/// signed exponent of at least two digits (`2.827626e+02`, never `2.827626e2`, which YAML 1.1
+/// loads as a string), and `.inf`, `-.inf`, `.nan`.
+pub fn yaml_float(v: f64, digits: usize) -> String {
+    if v.is_nan() {
+        return ".nan".into();
+    }
+    if v.is_infinite() {
+        return if v > 0.0 { ".inf" } else { "-.inf" }.into();
+    }
+    let v = v + 0.0; // no "-0"
+    let text = format!("{v:.digits$e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    let mantissa = if mantissa.contains('.') {
+        mantissa.to_string()
+    } else {
+        format!("{mantissa}.0")
+    };
+    let sign = if exponent < 0 { '-' } else { '+' };
+    format!("{mantissa}e{sign}{:02}", exponent.unsigned_abs())
+}
+
+/// The report as the seed's YAML (same keys and unit comments), plus propid's extras. Every
+/// number loads as a float in YAML 1.1 readers (PyYAML) and YAML 1.2 readers alike.
 pub fn to_yaml(r: &FitReport) -> String {
+    let f = yaml_float;
     let mut s = String::new();
-    s += &format!("mass: {:.9e} # [kg] | [kg*m^2]\n", r.mass + 0.0);
-    s += &format!("c1:   {:.9e} # [N*s/m] | [N*m*s/rad]\n", r.c1 + 0.0);
-    s += &format!("c2:   {:.9e} # [N*s^2/m^2] | [N*m*s^2/rad^2]\n", r.c2);
-    s += &format!("mass_stderr: {:.3e}\n", r.mass_stderr);
-    s += &format!("c1_stderr: {:.3e}\n", r.c1_stderr);
-    s += &format!("c2_stderr: {:.3e}\n", r.c2_stderr);
+    s += &format!("mass: {} # [kg] | [kg*m^2]\n", f(r.mass, 9));
+    s += &format!("c1:   {} # [N*s/m] | [N*m*s/rad]\n", f(r.c1, 9));
+    s += &format!("c2:   {} # [N*s^2/m^2] | [N*m*s^2/rad^2]\n", f(r.c2, 9));
+    s += &format!("mass_stderr: {}\n", f(r.mass_stderr, 3));
+    s += &format!("c1_stderr: {}\n", f(r.c1_stderr, 3));
+    s += &format!("c2_stderr: {}\n", f(r.c2_stderr, 3));
     s += &format!(
-        "rms: {:.6e} # acceleration residual [m/s^2] | [rad/s^2]\n",
-        r.rms
+        "rms: {} # acceleration residual [m/s^2] | [rad/s^2]\n",
+        f(r.rms, 6)
     );
     s += &format!("samples: {}\n", r.samples);
-    s += &format!("condition_number: {:.3e}\n", r.condition_number);
+    s += &format!("condition_number: {}\n", f(r.condition_number, 3));
     s += &format!("at_bound: [{}]\n", r.at_bound.join(", "));
     if let Some(cq) = r.c_q {
-        s += &format!("c_q: {cq:.6e} # propeller torque coefficient\n");
+        s += &format!("c_q: {} # propeller torque coefficient\n", f(cq, 6));
     }
     s
 }
@@ -379,5 +492,78 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
                 }],
             },
         ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// YAML 1.1's float pattern (the one PyYAML resolves), by hand:
+    /// `[-+]?([0-9][0-9_]*)?\.[0-9.]*([eE][-+][0-9]+)?`, or `[-+]?\.(inf|Inf|INF)`, `\.(nan|NaN|NAN)`.
+    fn yaml11_float(s: &str) -> bool {
+        if matches!(s, ".nan" | ".NaN" | ".NAN") {
+            return true;
+        }
+        let s = s.strip_prefix(['-', '+']).unwrap_or(s);
+        if matches!(s, ".inf" | ".Inf" | ".INF") {
+            return true;
+        }
+        let (mantissa, exponent) = match s.find(['e', 'E']) {
+            Some(i) => (&s[..i], Some(&s[i + 1..])),
+            None => (s, None),
+        };
+        let Some(dot) = mantissa.find('.') else {
+            return false;
+        };
+        let (int, frac) = (&mantissa[..dot], &mantissa[dot + 1..]);
+        let int_ok = int.is_empty()
+            || (int.as_bytes()[0].is_ascii_digit()
+                && int.bytes().all(|b| b.is_ascii_digit() || b == b'_'));
+        let frac_ok = frac.bytes().all(|b| b.is_ascii_digit() || b == b'.');
+        let exp_ok = exponent.is_none_or(|e| {
+            let digits = e.strip_prefix(['-', '+']);
+            digits.is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        });
+        int_ok && frac_ok && exp_ok
+    }
+
+    #[test]
+    fn yaml_floats_match_the_yaml_1_1_float_pattern_and_round_trip() {
+        assert!(
+            !yaml11_float("2.827626e2"),
+            "the old output is a string in YAML 1.1"
+        );
+        assert!(!yaml11_float("0.000000000e0"));
+        assert!(yaml11_float("2.827626e+02"));
+        for v in [
+            0.0,
+            -0.0,
+            282.7626,
+            -1e-9,
+            1.5e-8,
+            1e300,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            7.0,
+        ] {
+            for digits in [0, 3, 6, 9] {
+                let text = yaml_float(v, digits);
+                assert!(yaml11_float(&text), "{v} → `{text}`");
+                if v.is_finite() {
+                    let back: f64 = text.parse().unwrap();
+                    let want: f64 = format!("{v:.digits$e}").parse().unwrap();
+                    assert_eq!(back, want, "{v} → `{text}`");
+                }
+            }
+        }
+        assert_eq!(yaml_float(282.7626, 6), "2.827626e+02");
+        assert_eq!(yaml_float(0.0, 9), "0.000000000e+00");
+        assert_eq!(yaml_float(-0.0, 3), "0.000e+00");
+        assert_eq!(yaml_float(2e-5, 3), "2.000e-05");
+        assert_eq!(yaml_float(1e300, 3), "1.000e+300");
     }
 }

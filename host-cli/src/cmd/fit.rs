@@ -4,7 +4,7 @@ use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
+use propid_science::fit::{figure, fit_path, to_yaml, FitError, FitOptions};
 
 use crate::InputError;
 
@@ -24,23 +24,23 @@ pub struct Args {
     /// reads standard input.
     pub file: Option<PathBuf>,
     /// Smallest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e-9)]
+    #[arg(long, default_value_t = 1e-9, allow_negative_numbers = true)]
     pub mass_min: f64,
     /// Largest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e3)]
+    #[arg(long, default_value_t = 1e3, allow_negative_numbers = true)]
     pub mass_max: f64,
     /// Largest viscous coefficient c1 [N·s/m] or [N·m·s/rad]; 0 (the seed's default) forbids
     /// viscous friction.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub c1_max: f64,
     /// Largest quadratic drag coefficient c2 [N·s²/m²] or [N·m·s²/rad²].
-    #[arg(long, default_value_t = 1e2)]
+    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true)]
     pub c2_max: f64,
     /// Propeller diameter [m]: also report the torque coefficient C_Q = 4π²·c2/(ρ·D⁵).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub diameter: Option<f64>,
     /// Air density [kg/m³] for C_Q.
-    #[arg(long, default_value_t = 1.225)]
+    #[arg(long, default_value_t = 1.225, allow_negative_numbers = true)]
     pub density: f64,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Yaml)]
@@ -82,6 +82,9 @@ fn progress_bar() -> indicatif::ProgressBar {
 
 /// Runs `propid fit`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // Flags first: a bad bound or geometry is reported before any input is read.
+    let options = args.options();
+    options.check()?;
     let from_stdin = args.file.as_deref().is_none_or(|p| p == Path::new("-"));
     // Standard input is spooled to a temporary file: two passes in constant memory.
     let spool;
@@ -104,7 +107,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         args.file.as_deref().unwrap_or(Path::new("-"))
     };
-    let options = args.options();
     let bar = (args.progress || size_of(path) > 50 << 20).then(progress_bar);
     let mut on_progress = |done: u64, total: u64| {
         if let Some(bar) = &bar {
@@ -116,7 +118,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let (report, samples) = result.map_err(anyhow::Error::from).map_err(|e| {
+    // Bad input becomes an InputError or TsvError (exit status 2), not a FitError wrapping one.
+    let result = result.map_err(|e| match e {
+        FitError::Input(e) => anyhow::Error::from(e),
+        FitError::Tsv(e) => anyhow::Error::from(e),
+    });
+    let (report, samples) = result.map_err(|e| {
         if from_stdin {
             // Name standard input, not the spool file, in messages.
             let message = format!("{e:#}").replace(&path.display().to_string(), "<stdin>");
