@@ -2,10 +2,12 @@
 //!
 //! ## How data flows
 //! ```text
-//!  TSV file (or stdin, spooled to a temporary file)
-//!    pass 1: count rows, find the seed's window (last complete run of rows, minus its first 10 %)
-//!    pass 2: rows in the window ─► LoadEstimator::update (fixed memory) + a decimated copy for the plot
-//!    ─► LoadEstimator::estimate(bounds) ─► YAML/JSON on stdout, plot to a file
+//!  TSV file, memory-mapped (stdin: spooled to a temporary file first)
+//!    one pass, a chunk of whole lines per thread: each chunk keeps its last run of complete rows
+//!    as blocks of rows with their normal equations (LoadEstimator::update, fixed memory)
+//!    ─► the chunks' runs joined into the file's last run, the seed's 10 % cut made (the block it
+//!       falls in parsed again), the blocks merged (NormalEquations::merge)
+//!    ─► LoadEstimator::estimate(bounds) ─► YAML/JSON on stdout; a plot parses the window again
 //! ```
 //! The window reproduces the seed exactly: the seed keeps the rows from the start of the last
 //! run of rows whose every field is finite up to the last row where every column still has a
@@ -13,14 +15,17 @@
 //! file (pandas reads them all); propid checks the columns it uses (t, force, velocity,
 //! acceleration), which gives the same window on files whose other columns are complete.
 
+mod scan;
+
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::BufRead;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{Sample, TsvError, TsvReader};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -231,56 +236,235 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
 }
 
 /// Fits a TSV file with the seed's trimming and bounds. Returns the report and a decimated copy
-/// of the fitted rows (for a plot). `progress` is called now and then with (bytes read, file size)
-/// during the second pass.
+/// of the fitted rows (for a plot). `progress` is called now and then with (bytes read, file size).
 pub fn fit_path(
     path: &Path,
     options: &FitOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(FitReport, Vec<Sample>), FitError> {
+    fit_path_with(path, options, true, progress)
+}
+
+/// [`fit_path`], with the plot's rows only if `want_samples` (they cost a second parse of the
+/// fitted rows). `path` must be a regular file (it is memory-mapped).
+pub fn fit_path_with(
+    path: &Path,
+    options: &FitOptions,
+    want_samples: bool,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(FitReport, Vec<Sample>), FitError> {
     options.check()?;
     let name = path.display().to_string();
-    let open = || -> Result<TsvReader<BufReader<File>>, FitError> {
-        let f = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
-        Ok(TsvReader::new(
-            BufReader::with_capacity(1 << 16, f),
-            name.clone(),
-        )?)
+    let file = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+    let size = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let map = if size == 0 {
+        None
+    } else {
+        // SAFETY: a read-only map of a file propid never writes. Another process shrinking
+        // the file while it is mapped would make a read fault (SIGBUS); that is the caveat
+        // every memory-mapping reader accepts, and the file is read once, start to end.
+        let map = unsafe { memmap2::Mmap::map(&file) }
+            .map_err(|e| InputError(format!("{name}: cannot map: {e}")))?;
+        let _ = map.advise(memmap2::Advice::Sequential);
+        Some(map)
     };
-    let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-    let mut reader = open()?;
-    let window = find_window(&mut reader)?;
-    let mut reader = open()?;
-    let mut estimator = LoadEstimator::<f64>::new();
-    let keep_every = ((window.last - window.first + 1) / 4000).max(1);
-    let mut kept = Vec::new();
-    let mut i = 0u64;
-    let mut overflow = None;
-    while let Some(row) = reader.next_row()? {
-        if i >= window.first && i <= window.last {
-            let s = row.sample;
-            estimator.update(s.force, s.velocity, s.acceleration);
-            if overflow.is_none() && !sums_finite(&estimator) {
-                overflow = Some((reader.line_number(), s));
+    let data: &[u8] = map.as_deref().unwrap_or(&[]);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunks = if data.len() < 1 << 20 {
+        1
+    } else {
+        threads.min(data.len() / (512 << 10)).max(1)
+    };
+    fit_bytes(
+        data,
+        map.as_ref(),
+        &name,
+        options,
+        want_samples,
+        chunks,
+        progress,
+    )
+}
+
+/// Fits the TSV in `data` (named `name` in messages). `map` is the mapping `data` comes from, if
+/// any: pages already scanned are released from it.
+fn fit_bytes(
+    data: &[u8],
+    map: Option<&memmap2::Mmap>,
+    name: &str,
+    options: &FitOptions,
+    want_samples: bool,
+    chunks: usize,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(FitReport, Vec<Sample>), FitError> {
+    let reader = TsvReader::new(data, name)?;
+    let layout = reader.layout().clone();
+    let header_len = reader.bytes_read() as usize;
+    let size = data.len() as u64;
+    let pieces = scan::split(data, header_len, chunks);
+    let done = AtomicU64::new(header_len as u64);
+    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = match pieces.split_first() {
+        None => Vec::new(),
+        Some((&(a, b), rest)) => std::thread::scope(|s| {
+            let handles: Vec<_> = rest
+                .iter()
+                .map(|&(a, b)| {
+                    let (layout, done) = (&layout, &done);
+                    s.spawn(move || scan::scan(data, a, b, layout, map, done, || {}))
+                })
+                .collect();
+            // This thread scans the first chunk and reports the progress of all.
+            let first = scan::scan(data, a, b, &layout, map, &done, || {
+                progress(done.load(Ordering::Relaxed), size)
+            });
+            let mut out = vec![first];
+            for h in handles {
+                out.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
             }
-            if (i - window.first) % keep_every == 0 {
-                kept.push(s);
-            }
-        }
-        i += 1;
-        if i > window.last {
+            out
+        }),
+    };
+    progress(size, size);
+    // Chunk k's lines start after line_base[k]; its rows after row_base[k].
+    let mut chunks = Vec::with_capacity(results.len());
+    let (mut line_base, mut row_base) = (vec![], vec![]);
+    let (mut lines, mut rows, mut complete) = (1u64, 0u64, 0u64);
+    for r in results {
+        let c = r.map_err(|(line, e)| e.at(name, lines + line))?;
+        line_base.push(lines);
+        row_base.push(rows);
+        lines += c.lines;
+        rows += c.rows;
+        complete += c.complete;
+        chunks.push(c);
+    }
+    if rows == 0 {
+        return Err(InputError(format!("{name}: no data rows after the header")).into());
+    }
+    let Some(last_chunk) = chunks.iter().rposition(|c| c.run_rows > 0) else {
+        return Err(InputError(format!(
+            "{name}: no row has finite t, force, velocity and acceleration"
+        ))
+        .into());
+    };
+    // The file's last run: the last chunk's, joined with the runs of the chunks before it as
+    // long as they reach across the boundary.
+    let mut parts = vec![last_chunk];
+    let mut breaker = None;
+    let mut k = last_chunk;
+    while chunks[k].run_open_at_start {
+        let Some(j) = (0..k).rev().find(|j| chunks[*j].rows > 0) else {
+            break;
+        };
+        if chunks[j].last_row_complete {
+            parts.push(j);
+            k = j;
+        } else {
+            breaker = chunks[j]
+                .last_incomplete
+                .map(|(l, c)| (line_base[j] + l, c));
             break;
         }
-        if i % 65536 == 0 {
-            progress(reader.bytes_read(), size);
+    }
+    if !chunks[k].run_open_at_start {
+        breaker = chunks[k].breaker.map(|(l, c)| (line_base[k] + l, c));
+    }
+    parts.reverse();
+    let run_start = row_base[parts[0]] + chunks[parts[0]].run_first_row;
+    let run_rows: u64 = parts.iter().map(|k| chunks[*k].run_rows).sum();
+    let last = run_start + run_rows - 1;
+    let first = run_start + (0.1 * (last - run_start) as f64) as u64;
+    let window = Window {
+        first,
+        last,
+        rows,
+        complete,
+        run_start,
+        breaker: if complete > run_rows { breaker } else { None },
+    };
+    // The sums of rows first..=last: the block the cut falls in is parsed again.
+    let mut skip = first - run_start;
+    let mut total: Option<LoadEstimator<f64>> = None;
+    let mut start = (0usize, 0u64, 0u64); // (offset, line, rows to skip there)
+    for k in &parts {
+        for b in &chunks[*k].run {
+            let line = line_base[*k] + b.line;
+            if let Some(t) = &mut total {
+                t.merge(&b.sums);
+            } else if skip >= b.rows {
+                skip -= b.rows;
+            } else if skip == 0 {
+                total = Some(b.sums);
+                start = (b.offset, line, 0);
+            } else {
+                let mut est = LoadEstimator::new();
+                let mut i = 0u64;
+                walk(data, b.offset, b.rows, &layout, |_, v| {
+                    if i >= skip {
+                        est.update(v[2], v[3], v[4]);
+                    }
+                    i += 1;
+                });
+                total = Some(est);
+                start = (b.offset, line, skip);
+            }
         }
     }
-    progress(size, size);
-    if let Some((line, s)) = overflow {
-        return Err(overflow_error(&name, line, &s).into());
+    let estimator = total.unwrap_or_default();
+    let n = last - first + 1;
+    // Rows of the window, in order, with their line numbers.
+    let window_rows = |f: &mut dyn FnMut(u64, &[f64; 6])| {
+        let (offset, line, skip) = start;
+        let mut i = 0u64;
+        walk(data, offset, skip + n, &layout, |l, v| {
+            if i >= skip {
+                f(line + l - 1, v);
+            }
+            i += 1;
+        });
+    };
+    if !sums_finite(&estimator) {
+        let mut est = LoadEstimator::new();
+        let mut overflow = None;
+        window_rows(&mut |line, v| {
+            est.update(v[2], v[3], v[4]);
+            if overflow.is_none() && !sums_finite(&est) {
+                overflow = Some((line, row_of(v).sample));
+            }
+        });
+        if let Some((line, s)) = overflow {
+            return Err(overflow_error(name, line, &s).into());
+        }
     }
-    let report = report_of(&estimator, options, window, &name)?;
+    let report = report_of(&estimator, options, window, name)?;
+    let mut kept = Vec::new();
+    if want_samples {
+        let keep_every = (n / 4000).max(1);
+        let mut i = 0u64;
+        window_rows(&mut |_, v| {
+            if i % keep_every == 0 {
+                kept.push(row_of(v).sample);
+            }
+            i += 1;
+        });
+    }
     Ok((report, kept))
+}
+
+/// Calls `f(local line, values)` for the next `rows` rows from `offset` (blank lines skipped;
+/// the rows were parsed once already, so none fails).
+fn walk(data: &[u8], offset: usize, rows: u64, layout: &Layout, mut f: impl FnMut(u64, &[f64; 6])) {
+    let mut left = rows;
+    if left == 0 {
+        return;
+    }
+    scan::lines(data, offset, data.len(), |line, bytes, _| {
+        if let Ok(Some(v)) = layout.parse_line(bytes) {
+            f(line, &v);
+            left -= 1;
+        }
+        left > 0
+    });
 }
 
 /// True if every sum of the normal equations is finite.
@@ -498,6 +682,94 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The two-pass streaming reference (the seed's window found first, then summed in order).
+    fn reference(text: &str) -> Result<(Window, LoadEstimator<f64>), String> {
+        let mut r = TsvReader::new(text.as_bytes(), "mem").map_err(|e| e.to_string())?;
+        let w = find_window(&mut r).map_err(|e| e.to_string())?;
+        let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+        let mut est = LoadEstimator::new();
+        let mut i = 0;
+        while let Some(row) = r.next_row().unwrap() {
+            if i >= w.first && i <= w.last {
+                est.update(
+                    row.sample.force,
+                    row.sample.velocity,
+                    row.sample.acceleration,
+                );
+            }
+            i += 1;
+        }
+        Ok((w, est))
+    }
+
+    /// The one-pass chunked scan gives the two-pass answer whatever the chunks, with incomplete
+    /// rows and blank lines anywhere (head, middle, chunk borders, tail).
+    #[test]
+    fn chunked_scan_matches_the_two_pass_reference() {
+        let holes: [&[usize]; 7] = [
+            &[],
+            &[0, 1, 2],
+            &[700],
+            &[100, 3000, 3001, 5900],
+            &[5999],
+            &[2000, 2001, 2002, 2003, 4000],
+            &[5, 6, 5997, 5998, 5999],
+        ];
+        let options = FitOptions {
+            c1_max: f64::INFINITY,
+            ..FitOptions::default()
+        };
+        for (h, hole) in holes.iter().enumerate() {
+            let mut text = String::from("t\tforce\tvelocity\tacceleration\n");
+            let mut w = 3.0f64;
+            for i in 0..6000usize {
+                let q = 1.0 + (i as f64 * 0.01).sin();
+                let a = (q - 0.1 * w - 0.02 * w * w.abs()) / 0.5 + (i as f64 * 7.7).sin() * 0.01;
+                if hole.contains(&i) {
+                    text += &format!("{i}\t{q}\tnan\t{a}\n");
+                } else {
+                    text += &format!("{i}\t{q}\t{w}\t{a}\n");
+                }
+                if i % 977 == 0 {
+                    text += "\n \t\n";
+                }
+                w += a * 0.005;
+            }
+            let (want_window, want) = reference(&text).unwrap();
+            for chunks in [1, 2, 3, 5, 8, 64] {
+                let (report, samples) = fit_bytes(
+                    text.as_bytes(),
+                    None,
+                    "mem",
+                    &options,
+                    true,
+                    chunks,
+                    &mut |_, _| {},
+                )
+                .unwrap();
+                let got = report_of(&want, &options, want_window, "mem").unwrap();
+                assert_eq!(report.samples, want_window.last - want_window.first + 1);
+                assert_eq!(report.rows, 6000);
+                assert_eq!(report.warnings, got.warnings, "holes {h}, {chunks} chunks");
+                // Sums equal to rounding (compensated in both, added in another order); the
+                // solve amplifies that by at most the condition number.
+                let tol = got.condition_number * 1e-15;
+                for (a, b) in [
+                    (report.mass, got.mass),
+                    (report.c1, got.c1),
+                    (report.c2, got.c2),
+                ] {
+                    assert!(
+                        (a - b).abs() <= tol * b.abs(),
+                        "holes {h}, {chunks} chunks: {a} vs {b} (condition number {})",
+                        got.condition_number
+                    );
+                }
+                assert!(!samples.is_empty());
+            }
+        }
+    }
 
     /// YAML 1.1's float pattern (the one PyYAML resolves), by hand:
     /// `[-+]?([0-9][0-9_]*)?\.[0-9.]*([eE][-+][0-9]+)?`, or `[-+]?\.(inf|Inf|INF)`, `\.(nan|NaN|NAN)`.

@@ -4,7 +4,7 @@ use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use propid_science::fit::{figure, fit_path, to_yaml, FitError, FitOptions};
+use propid_science::fit::{figure, fit_path_with, to_yaml, FitError, FitOptions};
 
 use crate::InputError;
 
@@ -86,14 +86,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let options = args.options();
     options.check()?;
     let from_stdin = args.file.as_deref().is_none_or(|p| p == Path::new("-"));
-    // Standard input is spooled to a temporary file: two passes in constant memory.
+    // A pipe given by name (`<(…)`, a FIFO) cannot be mapped: it is spooled like stdin.
+    let pipe = args
+        .file
+        .as_deref()
+        .filter(|p| *p != Path::new("-"))
+        .filter(|p| std::fs::metadata(p).is_ok_and(|m| !m.is_file()));
+    // Standard input is spooled to a temporary file, which is then mapped like any file.
     let spool;
-    let path: &Path = if from_stdin {
+    let path: &Path = if from_stdin || pipe.is_some() {
         let mut tmp = tempfile::NamedTempFile::new().context("cannot create a temporary file")?;
-        let mut stdin = std::io::stdin().lock();
+        let mut stdin: Box<dyn Read> = match pipe {
+            Some(p) => Box::new(
+                std::fs::File::open(p)
+                    .map_err(|e| InputError(format!("{}: cannot open: {e}", p.display())))?,
+            ),
+            None => Box::new(std::io::stdin().lock()),
+        };
         let mut buf = vec![0u8; 1 << 16];
         loop {
-            let n = stdin.read(&mut buf).context("reading standard input")?;
+            let n = stdin.read(&mut buf).context("reading the input")?;
             if n == 0 {
                 break;
             }
@@ -114,7 +126,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.set_position(done);
         }
     };
-    let result = fit_path(path, &options, &mut on_progress);
+    let result = fit_path_with(path, &options, args.plot.is_some(), &mut on_progress);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
@@ -124,9 +136,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         FitError::Tsv(e) => anyhow::Error::from(e),
     });
     let (report, samples) = result.map_err(|e| {
-        if from_stdin {
-            // Name standard input, not the spool file, in messages.
-            let message = format!("{e:#}").replace(&path.display().to_string(), "<stdin>");
+        if from_stdin || pipe.is_some() {
+            // Name standard input (or the pipe), not the spool file, in messages.
+            let shown = pipe.map_or("<stdin>".into(), |p| p.display().to_string());
+            let message = format!("{e:#}").replace(&path.display().to_string(), &shown);
             if crate::exit_status_for(&e) == 2 {
                 InputError(message).into()
             } else {
