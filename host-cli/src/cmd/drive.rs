@@ -76,13 +76,13 @@ impl Args {
             self.setpoint_id,
             "setpoint-id",
             "UAVCAN__PUB__SP_RAT__ID",
-            "setpoint subject-ID",
+            "setpoint id",
         )?;
         let feedback_id = need(
             self.feedback_id,
             "feedback-id",
             "UAVCAN__SUB__FB_DYN__ID",
-            "feedback subject-ID",
+            "feedback id",
         )?;
         let (lo, hi) = parse_lo_hi(&self.setpoint_rat_lo_hi)?;
         let cfg = DriveConfig {

@@ -5,6 +5,8 @@ pub mod diagnose;
 pub mod drive;
 pub mod fit;
 pub mod import;
+pub mod plan;
 pub mod replay;
+pub mod report;
 pub mod sim;
 pub mod sim_drive;
