@@ -10,11 +10,11 @@ use canadensis_can::driver::ReceiveDriver;
 use canadensis_core::subscription::Subscription as CdSubscription;
 use canadensis_core::time::{Clock, MicrosecondDuration32, Microseconds32};
 use canadensis_core::transport::Receiver as _;
-use canadensis_core::{nb, SubjectId};
+use canadensis_core::{nb, SubjectId as CdSubjectId};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use propid_core::can::{
-    Frame, FrameSplitter, Mtu, Port, Priority, Reassembler, Subscription, TransferHeader,
-    TransferKind,
+    Frame, FrameSplitter, Mtu, NodeId, Port, Priority, Reassembler, SubjectId, Subscription,
+    TransferHeader, TransferKind,
 };
 use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Vector31};
 use propid_core::time::Instant;
@@ -25,9 +25,9 @@ fn stream() -> Vec<Frame> {
         let h = TransferHeader {
             priority: Priority::HIGH,
             kind: TransferKind::Message {
-                subject_id: subject,
+                subject_id: SubjectId::from_const(subject),
             },
-            source: Some(source),
+            source: Some(NodeId::from_const(source)),
             transfer_id: tid % 32,
         };
         frames.extend(
@@ -58,10 +58,10 @@ fn stream() -> Vec<Frame> {
 }
 
 fn propid_count(frames: &[Frame]) -> usize {
-    let mut rx: Reassembler<3, 32, 64> = Reassembler::new(Some(1));
+    let mut rx: Reassembler<3, 32, 64> = Reassembler::new(Some(NodeId::from_const(1)));
     for (port, extent) in [(110, 23), (24, 62), (7509, 12)] {
         rx.subscribe(Subscription {
-            port: Port::Subject(port),
+            port: Port::Subject(SubjectId::from_const(port)),
             extent,
             transfer_id_timeout: Duration::from_secs(2),
         })
@@ -117,7 +117,7 @@ fn canadensis_count(frames: &[canadensis_can::Frame]) -> usize {
     let timeout = MicrosecondDuration32::from_ticks(2_000_000);
     for (port, extent) in [(110u16, 23usize), (24, 62), (7509, 12)] {
         rx.subscribe_message(
-            SubjectId::try_from(port).unwrap(),
+            CdSubjectId::try_from(port).unwrap(),
             extent,
             timeout,
             &mut driver,

@@ -5,7 +5,9 @@
 use std::io::Write;
 use std::time::Instant as Clock;
 
-use propid_core::can::{FrameSplitter, Mtu, Priority, TransferHeader, TransferKind};
+use propid_core::can::{
+    FrameSplitter, Mtu, NodeId, Priority, SubjectId, TransferHeader, TransferKind,
+};
 use propid_core::dsdl::{DataType, DoF3rdTs};
 use propid_core::time::Instant;
 
@@ -25,8 +27,10 @@ fn main() {
             let n = fb.serialize(&mut buf);
             let h = TransferHeader {
                 priority: Priority::HIGH,
-                kind: TransferKind::Message { subject_id: 110 },
-                source: Some(42),
+                kind: TransferKind::Message {
+                    subject_id: SubjectId::from_const(110),
+                },
+                source: Some(NodeId::from_const(42)),
                 transfer_id: (k % 32) as u8,
             };
             for f in FrameSplitter::new(&h, &buf[..n], Mtu::Classic, Instant::ZERO).unwrap() {
@@ -50,7 +54,13 @@ fn main() {
     let bytes = std::fs::metadata(&log).unwrap().len();
     let t0 = Clock::now();
     let input = std::io::BufReader::new(std::fs::File::open(&log).unwrap());
-    let rows = propid_io::candump::replay(input, "bus.log", 110, std::io::sink()).unwrap();
+    let rows = propid_io::candump::replay(
+        input,
+        "bus.log",
+        SubjectId::from_const(110),
+        std::io::sink(),
+    )
+    .unwrap();
     let secs = t0.elapsed().as_secs_f64();
     assert_eq!(rows, transfers);
     println!(

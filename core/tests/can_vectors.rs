@@ -5,7 +5,8 @@
 use core::time::Duration;
 
 use propid_core::can::{
-    FrameSplitter, Mtu, Priority, Reassembler, Subscription, TransferHeader, TransferKind,
+    FrameSplitter, Mtu, NodeId, Priority, Reassembler, ServiceId, SubjectId, Subscription,
+    TransferHeader, TransferKind,
 };
 use propid_core::time::Instant;
 use serde_json::Value;
@@ -13,11 +14,11 @@ use serde_json::Value;
 fn header_of(case: &Value) -> TransferHeader {
     let kind = if let Some(subject) = case.get("subject_id").and_then(Value::as_u64) {
         TransferKind::Message {
-            subject_id: subject as u16,
+            subject_id: SubjectId::try_from(subject).unwrap(),
         }
     } else {
-        let service_id = case["service_id"].as_u64().unwrap() as u16;
-        let destination = case["destination_node_id"].as_u64().unwrap() as u8;
+        let service_id = ServiceId::try_from(case["service_id"].as_u64().unwrap()).unwrap();
+        let destination = NodeId::try_from(case["destination_node_id"].as_u64().unwrap()).unwrap();
         if case["request"].as_bool().unwrap() {
             TransferKind::Request {
                 service_id,
@@ -33,7 +34,9 @@ fn header_of(case: &Value) -> TransferHeader {
     TransferHeader {
         priority: Priority::new(case["priority"].as_u64().unwrap() as u8).unwrap(),
         kind,
-        source: case["source_node_id"].as_u64().map(|n| n as u8),
+        source: case["source_node_id"]
+            .as_u64()
+            .map(|n| NodeId::try_from(n).unwrap()),
         transfer_id: (case["transfer_id"].as_u64().unwrap() % 32) as u8,
     }
 }

@@ -21,8 +21,8 @@ use core::time::Duration;
 use std::collections::HashMap;
 
 use propid_core::can::{
-    Frame, FrameSplitter, Mtu, Port, Priority, Reassembler, RxError, Subscription, TransferHeader,
-    TransferKind,
+    Frame, FrameSplitter, Mtu, NodeId, Port, Priority, Reassembler, RxError, SubjectId,
+    Subscription, TransferHeader, TransferKind,
 };
 use propid_core::time::Instant;
 use rand::rngs::StdRng;
@@ -43,7 +43,7 @@ fn a_million_transfers_through_a_hostile_channel() {
     let mut rx: Reassembler<3, 64, 128> = Reassembler::new(None);
     for s in SUBJECTS {
         rx.subscribe(Subscription {
-            port: Port::Subject(s),
+            port: Port::Subject(SubjectId::from_const(s)),
             extent: 128,
             transfer_id_timeout: Duration::from_secs(2),
         })
@@ -81,8 +81,10 @@ fn a_million_transfers_through_a_hostile_channel() {
             let payload: Vec<u8> = (0..len).map(|_| rng.random()).collect();
             let header = TransferHeader {
                 priority: Priority::NOMINAL,
-                kind: TransferKind::Message { subject_id: key.1 },
-                source: Some(key.0),
+                kind: TransferKind::Message {
+                    subject_id: SubjectId::from_const(key.1),
+                },
+                source: Some(NodeId::from_const(key.0)),
                 transfer_id: *tid,
             };
             *tid = (*tid + 1) % 32;
@@ -133,7 +135,7 @@ fn a_million_transfers_through_a_hostile_channel() {
                 let TransferKind::Message { subject_id } = t.header.kind else {
                     unreachable!("only subjects are subscribed")
                 };
-                let key = (t.header.source.unwrap(), subject_id);
+                let key = (t.header.source.unwrap().get(), subject_id.get());
                 match round.get_mut(&key) {
                     Some(sent) if is_sent_payload(&sent.payload, t.payload) => {
                         if sent.delivered {

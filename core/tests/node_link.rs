@@ -3,7 +3,7 @@
 
 use core::time::Duration;
 
-use propid_core::can::{Frame, Mtu, Priority};
+use propid_core::can::{Frame, Mtu, NodeId, Priority, ServiceId, SubjectId};
 use propid_core::dsdl::{
     DataType, DoF3rdTs, GetInfoResponse, Heartbeat, Vector31, GET_INFO_SERVICE_ID,
 };
@@ -11,6 +11,11 @@ use propid_core::node::{Event, Node, NodeConfig};
 use propid_core::time::Instant;
 
 type TestNode = Node<6, 8, 512, 64>;
+
+const HEARTBEAT: SubjectId = SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID);
+const SETPOINT: SubjectId = SubjectId::from_const(24);
+const FEEDBACK: SubjectId = SubjectId::from_const(110);
+const GET_INFO: ServiceId = ServiceId::from_const(GET_INFO_SERVICE_ID);
 
 #[derive(Default)]
 struct Seen {
@@ -23,26 +28,26 @@ struct Seen {
 fn record(seen: &mut Seen, event: Event<'_>) {
     match event {
         Event::Message {
-            subject_id: 7509,
+            subject_id: HEARTBEAT,
             source,
             payload,
             ..
         } => seen.heartbeats.push((
-            source.unwrap(),
+            source.unwrap().get(),
             Heartbeat::deserialize(payload).unwrap().uptime,
         )),
         Event::Message {
-            subject_id: 24,
+            subject_id: SETPOINT,
             payload,
             ..
         } => seen.setpoints.push(Vector31::deserialize(payload).unwrap()),
         Event::Message {
-            subject_id: 110,
+            subject_id: FEEDBACK,
             payload,
             ..
         } => seen.feedback.push(DoF3rdTs::deserialize(payload).unwrap()),
         Event::Response {
-            service_id: GET_INFO_SERVICE_ID,
+            service_id: GET_INFO,
             payload,
             ..
         } => seen
@@ -55,21 +60,26 @@ fn record(seen: &mut Seen, event: Event<'_>) {
 /// Runs both nodes for `seconds` of virtual time in 1 ms steps; `lose(k)` drops the k-th frame.
 fn run(mtu: Mtu, seconds: u64, lose: impl Fn(u64) -> bool) -> (Seen, Seen, TestNode, TestNode) {
     let t0 = Instant::from_millis(1000);
-    let mut driver = TestNode::new(NodeConfig::new(10, "org.propid.driver", mtu), t0);
-    let mut drive = TestNode::new(NodeConfig::new(42, "org.propid.sim_drive", mtu), t0);
+    let mut driver = TestNode::new(
+        NodeConfig::new(NodeId::from_const(10), "org.propid.driver", mtu),
+        t0,
+    );
+    let mut drive = TestNode::new(
+        NodeConfig::new(NodeId::from_const(42), "org.propid.sim_drive", mtu),
+        t0,
+    );
     for n in [&mut driver, &mut drive] {
-        n.subscribe_message(Heartbeat::FIXED_SUBJECT_ID, 12)
-            .unwrap();
+        n.subscribe_message(HEARTBEAT, 12).unwrap();
     }
-    drive.subscribe_message(24, 62).unwrap();
-    driver.subscribe_message(110, 23).unwrap();
+    drive.subscribe_message(SETPOINT, 62).unwrap();
+    driver.subscribe_message(FEEDBACK, 23).unwrap();
     let (mut a_seen, mut b_seen) = (Seen::default(), Seen::default());
     let mut k = 0u64;
     driver
         .request(
             t0,
-            GET_INFO_SERVICE_ID,
-            42,
+            GET_INFO,
+            NodeId::from_const(42),
             &[],
             448,
             Duration::from_secs(1),
@@ -80,7 +90,13 @@ fn run(mtu: Mtu, seconds: u64, lose: impl Fn(u64) -> bool) -> (Seen, Seen, TestN
         if ms % 5 == 0 {
             let sp = Vector31::splat((ms as f32 / 1000.0).sin());
             driver
-                .publish_message(now, 24, Priority::HIGH, &sp, Duration::from_millis(50))
+                .publish_message(
+                    now,
+                    SETPOINT,
+                    Priority::HIGH,
+                    &sp,
+                    Duration::from_millis(50),
+                )
                 .unwrap();
         }
         if ms % 10 == 0 {
@@ -88,7 +104,13 @@ fn run(mtu: Mtu, seconds: u64, lose: impl Fn(u64) -> bool) -> (Seen, Seen, TestN
             fb.timestamp.microsecond = ms * 1000;
             fb.value.kinematics.base.velocity = ms as f32;
             drive
-                .publish_message(now, 110, Priority::HIGH, &fb, Duration::from_millis(50))
+                .publish_message(
+                    now,
+                    FEEDBACK,
+                    Priority::HIGH,
+                    &fb,
+                    Duration::from_millis(50),
+                )
                 .unwrap();
         }
         let mut a_to_b: Vec<Frame> = Vec::new();
@@ -143,7 +165,7 @@ fn heartbeats_get_info_and_pub_sub_over_classic_and_fd() {
         assert_eq!(b.setpoints.len(), 2000);
         assert_eq!(a.feedback.len(), 1000);
         assert_eq!(a.feedback[999].value.kinematics.base.velocity, 9990.0);
-        assert_eq!(driver.stats().tx_expired, 0);
+        assert_eq!(driver.stats().tx.expired, 0);
     }
 }
 

@@ -15,7 +15,7 @@ use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use propid_core::can::{Mtu, Priority};
+use propid_core::can::{Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig};
@@ -35,15 +35,15 @@ pub const STOP_REPEATS: usize = 5;
 #[derive(Clone, Debug)]
 pub struct DriveConfig {
     /// Node-ID.
-    pub node_id: u8,
+    pub node_id: NodeId,
     /// MTU (8 or 64).
     pub mtu: usize,
     /// Readiness subject, if any.
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
-    pub setpoint_id: u16,
+    pub setpoint_id: SubjectId,
     /// Feedback subject.
-    pub feedback_id: u16,
+    pub feedback_id: SubjectId,
     /// The excitation.
     pub excitation: Excitation,
     /// Setpoint period [s].
@@ -59,11 +59,11 @@ impl DriveConfig {
     /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no progress lines.
     pub fn example(excitation: Excitation) -> Self {
         DriveConfig {
-            node_id: 10,
+            node_id: NodeId::from_const(10),
             mtu: 8,
-            readiness_id: Some(10),
-            setpoint_id: 24,
-            feedback_id: 110,
+            readiness_id: Some(SubjectId::from_const(10)),
+            setpoint_id: SubjectId::from_const(24),
+            feedback_id: SubjectId::from_const(110),
             excitation,
             setpoint_period: 0.005,
             deadman: 0.5,
@@ -73,25 +73,8 @@ impl DriveConfig {
 }
 
 impl DriveConfig {
-    /// Checks every value before anything is sent.
+    /// Checks every value before anything is sent (the IDs are in range by type).
     pub fn validate(&self) -> Result<(), InputError> {
-        if self.node_id > 127 {
-            return Err(InputError(format!(
-                "node id must be 0..=127 (got {})",
-                self.node_id
-            )));
-        }
-        for (name, id) in [
-            ("setpoint", Some(self.setpoint_id)),
-            ("feedback", Some(self.feedback_id)),
-            ("readiness", self.readiness_id),
-        ] {
-            if let Some(id) = id.filter(|id| *id > 8191) {
-                return Err(InputError(format!(
-                    "{name} subject-ID must be 0..=8191 (got {id})"
-                )));
-            }
-        }
         self.excitation.validate()?;
         if !(self.setpoint_period > 0.0 && self.setpoint_period < 1.0) {
             return Err(InputError(format!(

@@ -11,7 +11,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use propid_core::can::{Mtu, Priority};
+use propid_core::can::{Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
@@ -25,15 +25,15 @@ use crate::HostNode;
 #[derive(Clone, Debug)]
 pub struct SimDriveConfig {
     /// Node-ID.
-    pub node_id: u8,
+    pub node_id: NodeId,
     /// 8 or 64.
     pub mtu: usize,
     /// Readiness subject.
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
-    pub setpoint_id: u16,
+    pub setpoint_id: SubjectId,
     /// Feedback subject.
-    pub feedback_id: u16,
+    pub feedback_id: SubjectId,
     /// Feedback interval [s].
     pub interval: f64,
     /// Run time limit [s] (0: none).
@@ -49,11 +49,11 @@ impl SimDriveConfig {
     /// feedback on 110 every 2 ms, Classic CAN, running until stopped.
     pub fn example(stand: StandConfig, seed: u64) -> Self {
         SimDriveConfig {
-            node_id: 42,
+            node_id: NodeId::from_const(42),
             mtu: 8,
-            readiness_id: Some(10),
-            setpoint_id: 24,
-            feedback_id: 110,
+            readiness_id: Some(SubjectId::from_const(10)),
+            setpoint_id: SubjectId::from_const(24),
+            feedback_id: SubjectId::from_const(110),
             interval: 0.002,
             duration: 0.0,
             stand,

@@ -26,7 +26,7 @@ use cortex_m::peripheral::SYST;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::{debug, hprintln};
 use panic_semihosting as _;
-use propid_core::can::{FrameSplitter, Mtu, Priority, TransferHeader, TransferKind};
+use propid_core::can::{FrameSplitter, Mtu, NodeId, Priority, SubjectId, TransferHeader, TransferKind};
 use propid_core::dsdl::{BitWriter, DataType, DoF3rdTs};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Node, NodeConfig};
@@ -39,8 +39,9 @@ const C2: f32 = 1.5e-8;
 /// Control tick [s] and run time [ticks].
 const DT: f32 = 1e-3;
 const TICKS: u32 = 20_000;
-const FEEDBACK_SUBJECT: u16 = 110;
-const ESTIMATE_SUBJECT: u16 = 111;
+const FEEDBACK_SUBJECT: SubjectId = SubjectId::from_const(110);
+const ESTIMATE_SUBJECT: SubjectId = SubjectId::from_const(111);
+const NODE_ID: NodeId = NodeId::from_const(42);
 
 type FirmwareNode = Node<2, 2, 64, 32>;
 
@@ -99,7 +100,7 @@ fn main() -> ! {
     let ipt = instructions_per_tick();
 
     let node: &'static mut FirmwareNode = cortex_m::singleton!(: FirmwareNode =
-        Node::new(NodeConfig::new(42, "org.propid.firmware_demo", Mtu::Classic), Instant::ZERO)).unwrap();
+        Node::new(NodeConfig::new(NODE_ID, "org.propid.firmware_demo", Mtu::Classic), Instant::ZERO)).unwrap();
     let mut can = can_glue::LoopbackCan { transmitted: 0, bytes: 0 };
     let mut load = Load::new(LoadParams::propeller(INERTIA, C2), 800.0f32);
     let mut estimator = LoadEstimator::<f32>::with_forgetting(0.9995);
@@ -139,7 +140,7 @@ fn main() -> ! {
     let header = TransferHeader {
         priority: Priority::HIGH,
         kind: TransferKind::Message { subject_id: FEEDBACK_SUBJECT },
-        source: Some(42),
+        source: Some(NODE_ID),
         transfer_id: 0,
     };
     let fb = feedback(1.0, &load, 0.05, 100.0);
@@ -172,7 +173,7 @@ fn main() -> ! {
     let stats = node.stats();
     hprintln!(
         "firmware-demo: {} CAN frames ({} bytes) sent, {} heartbeats, {} frames expired in the queue",
-        can.transmitted, can.bytes, stats.heartbeats, stats.tx_expired
+        can.transmitted, can.bytes, stats.heartbeats, stats.tx.expired
     );
     hprintln!("firmware-demo: {} instructions per SysTick tick (calibrated)", ipt);
     hprintln!("firmware-demo: cost: estimator update {} instructions, DoF3rdTs encode into {} frames {} instructions", update_instr as u32, frames / N, encode_instr as u32);

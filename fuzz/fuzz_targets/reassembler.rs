@@ -5,12 +5,16 @@
 use core::time::Duration;
 
 use libfuzzer_sys::fuzz_target;
-use propid_core::can::{CanId, Frame, Port, Reassembler, Subscription};
+use propid_core::can::{CanId, Frame, NodeId, Port, Reassembler, ServiceId, SubjectId, Subscription};
 use propid_core::time::Instant;
 
 fuzz_target!(|bytes: &[u8]| {
-    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(42));
-    for (port, extent) in [(Port::Subject(100), 23), (Port::Subject(7509), 12), (Port::Request(430), 0)] {
+    let mut rx: Reassembler<3, 4, 64> = Reassembler::new(Some(NodeId::from_const(42)));
+    for (port, extent) in [
+        (Port::Subject(SubjectId::from_const(100)), 23),
+        (Port::Subject(SubjectId::from_const(7509)), 12),
+        (Port::Request(ServiceId::from_const(430)), 0),
+    ] {
         rx.subscribe(Subscription { port, extent, transfer_id_timeout: Duration::from_millis(50) })
             .unwrap();
     }

@@ -10,7 +10,7 @@
 use std::io::{BufRead, Write};
 use std::time::Duration;
 
-use propid_core::can::{Frame, Port, Reassembler, Subscription, TransferKind};
+use propid_core::can::{Frame, Port, Reassembler, SubjectId, Subscription, TransferKind};
 use propid_core::dsdl::{DataType, DoF3rdTs};
 use propid_core::time::Instant;
 
@@ -101,7 +101,7 @@ pub enum ReplayError {
 pub fn replay(
     input: impl BufRead,
     name: &str,
-    feedback_id: u16,
+    feedback_id: SubjectId,
     out: impl Write,
 ) -> Result<u64, ReplayError> {
     let mut rx: Reassembler<1, 32, 64> = Reassembler::new(None);

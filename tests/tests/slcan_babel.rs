@@ -339,3 +339,47 @@ fn the_device_disappearing_mid_run_is_an_error_naming_the_port() {
         assert!(matches!(r, Err(TransportError::Closed(_))));
     }
 }
+
+#[test]
+fn the_stop_sequence_reports_whether_it_got_through() {
+    // The peer is asleep: the link fills, and a STANDBY offered with a bound says it did not
+    // get through, within that bound.
+    let (mut peer, host_end) = TTYPort::pair().expect("pty pair");
+    let mut t = SlcanTransport::from_tty(host_end, "pty-stop").unwrap();
+    t.set_status_interval(None);
+    let setpoint = Frame::new(Instant::ZERO, 0x1060_642A, &[0; 8]).unwrap();
+    // Full means refused for 20 ms on end (the pty moves bytes into the reader's buffer in the
+    // background for a while after the first refusal).
+    let mut refused_since = None;
+    while refused_since.is_none_or(|s: std::time::Instant| s.elapsed() < Duration::from_millis(20))
+    {
+        match t.send(&setpoint) {
+            Ok(()) => refused_since = None,
+            Err(e) if e.is_would_block() => {
+                refused_since.get_or_insert_with(std::time::Instant::now);
+            }
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let standby = Frame::new(Instant::ZERO, 0x1060_6B2A, &[2, 0xE0]).unwrap();
+    let t0 = std::time::Instant::now();
+    let bound = Duration::from_millis(50);
+    assert!(!t.send_by(&standby, t0 + bound).unwrap());
+    let took = t0.elapsed();
+    assert!(took >= bound && took < bound * 4, "{took:?}");
+    // The peer wakes up and drains: the same call now gets through, and the STANDBY is the
+    // last line on the wire, whole.
+    let reader = std::thread::spawn(move || drain(&mut peer, Duration::from_millis(300)));
+    assert!(t
+        .send_by(&standby, std::time::Instant::now() + Duration::from_secs(2))
+        .unwrap());
+    let bytes = reader.join().unwrap();
+    assert!(
+        bytes.ends_with(b"T10606B2A202E0\r"),
+        "{:?}",
+        &bytes[bytes.len().saturating_sub(40)..]
+    );
+    let mut d = Decoder::new();
+    d.push(&bytes, &mut Vec::new());
+    assert_eq!(d.garbage_count(), 0);
+}

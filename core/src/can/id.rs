@@ -7,7 +7,7 @@
 //! Bits 22..21 of a message ID are reserved and sent as 1 (as PyCyphal does); receivers ignore
 //! them. A message frame with bit 23 or bit 7 set is not Cyphal and is dropped.
 
-use super::TransferKind;
+use super::{NodeId, ServiceId, SubjectId, TransferKind};
 
 /// Transfer priority, 0 (exceptional) … 7 (optional); 4 is nominal.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -56,7 +56,7 @@ pub struct CanId {
     /// Message or service, port and destination.
     pub kind: TransferKind,
     /// Source node-ID (`None` for anonymous messages).
-    pub source: Option<u8>,
+    pub source: Option<NodeId>,
 }
 
 impl CanId {
@@ -66,7 +66,8 @@ impl CanId {
             return None;
         }
         let priority = Priority((id >> 26) as u8 & 7);
-        let source = (id & 0x7F) as u8;
+        // Masked to their field widths, so always in range.
+        let source = NodeId::from_const((id & 0x7F) as u8);
         if id & (1 << 25) == 0 {
             if id & (1 << 23) != 0 || id & (1 << 7) != 0 {
                 return None;
@@ -75,7 +76,7 @@ impl CanId {
             Some(CanId {
                 priority,
                 kind: TransferKind::Message {
-                    subject_id: ((id >> 8) & 0x1FFF) as u16,
+                    subject_id: SubjectId::from_const(((id >> 8) & 0x1FFF) as u16),
                 },
                 source: if anonymous { None } else { Some(source) },
             })
@@ -83,8 +84,8 @@ impl CanId {
             if id & (1 << 23) != 0 {
                 return None;
             }
-            let service_id = ((id >> 14) & 0x1FF) as u16;
-            let destination = ((id >> 7) & 0x7F) as u8;
+            let service_id = ServiceId::from_const(((id >> 14) & 0x1FF) as u16);
+            let destination = NodeId::from_const(((id >> 7) & 0x7F) as u8);
             if destination == source {
                 return None;
             }
@@ -109,21 +110,17 @@ impl CanId {
 
     /// Emits the 29-bit ID. For anonymous messages `pseudo_id` fills the source field (the
     /// specification asks for a pseudo-random value; PyCyphal uses the payload byte sum).
-    /// `None` if a field is out of range (subject > 8191, service > 511, node > 127) or a
-    /// service transfer is anonymous.
+    /// `None` for an anonymous service transfer, which does not exist; every field is in range
+    /// by type.
     pub fn emit(&self, pseudo_id: u8) -> Option<u32> {
         let prio = u32::from(self.priority.0) << 26;
         match self.kind {
             TransferKind::Message { subject_id } => {
-                if subject_id > 8191 {
-                    return None;
-                }
                 let (anon, src) = match self.source {
-                    Some(s) if s <= 127 => (0, u32::from(s)),
-                    Some(_) => return None,
+                    Some(s) => (0, u32::from(s.get())),
                     None => (1 << 24, u32::from(pseudo_id & 0x7F)),
                 };
-                Some(prio | anon | (3 << 21) | (u32::from(subject_id) << 8) | src)
+                Some(prio | anon | (3 << 21) | (u32::from(subject_id.get()) << 8) | src)
             }
             TransferKind::Request {
                 service_id,
@@ -134,9 +131,6 @@ impl CanId {
                 destination,
             } => {
                 let src = self.source?;
-                if service_id > 511 || destination > 127 || src > 127 {
-                    return None;
-                }
                 let req = if matches!(self.kind, TransferKind::Request { .. }) {
                     1 << 24
                 } else {
@@ -145,9 +139,9 @@ impl CanId {
                 Some(
                     prio | (1 << 25)
                         | req
-                        | (u32::from(service_id) << 14)
-                        | (u32::from(destination) << 7)
-                        | u32::from(src),
+                        | (u32::from(service_id.get()) << 14)
+                        | (u32::from(destination.get()) << 7)
+                        | u32::from(src.get()),
                 )
             }
         }
@@ -163,26 +157,31 @@ mod tests {
         // Priority 4, subject 100, node 42.
         let m = CanId::parse(0x1060_642A).unwrap();
         assert_eq!(m.priority, Priority::NOMINAL);
-        assert_eq!(m.kind, TransferKind::Message { subject_id: 100 });
-        assert_eq!(m.source, Some(42));
+        assert_eq!(
+            m.kind,
+            TransferKind::Message {
+                subject_id: SubjectId::from_const(100)
+            }
+        );
+        assert_eq!(m.source, Some(NodeId::from_const(42)));
         assert_eq!(m.emit(0), Some(0x1060_642A));
         // GetInfo request 10 → 42 and its response.
         let req = CanId::parse(0x136B_950A).unwrap();
         assert_eq!(
             req.kind,
             TransferKind::Request {
-                service_id: 430,
-                destination: 42
+                service_id: ServiceId::from_const(430),
+                destination: NodeId::from_const(42)
             }
         );
-        assert_eq!(req.source, Some(10));
+        assert_eq!(req.source, Some(NodeId::from_const(10)));
         assert_eq!(req.emit(0), Some(0x136B_950A));
         let resp = CanId::parse(0x126B_852A).unwrap();
         assert_eq!(
             resp.kind,
             TransferKind::Response {
-                service_id: 430,
-                destination: 10
+                service_id: ServiceId::from_const(430),
+                destination: NodeId::from_const(10)
             }
         );
         assert_eq!(resp.emit(0), Some(0x126B_852A));
@@ -199,11 +198,15 @@ mod tests {
         // Anonymous.
         let a = CanId::parse(0x1160_6455).unwrap();
         assert_eq!(a.source, None);
-        // Out-of-range fields are refused on emit.
+        // Out-of-range fields cannot be built; an anonymous service transfer is refused.
+        assert_eq!(SubjectId::new(8192), None);
         let bad = CanId {
             priority: Priority::NOMINAL,
-            kind: TransferKind::Message { subject_id: 8192 },
-            source: Some(1),
+            kind: TransferKind::Request {
+                service_id: ServiceId::from_const(1),
+                destination: NodeId::from_const(2),
+            },
+            source: None,
         };
         assert_eq!(bad.emit(0), None);
     }

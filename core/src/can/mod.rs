@@ -6,6 +6,9 @@
 //!  receive:  Frame (+ timestamp) ──► CanId::parse ──► TailByte ──► Reassembler ──► Transfer { header, payload }
 //! ```
 //! - [`CanId`]: the 29-bit identifier: priority, message or service, port-ID, node-IDs.
+//! - [`NodeId`] (0..=127), [`SubjectId`] (0..=8191), [`ServiceId`] (0..=511): IDs as types, made
+//!   once where a number enters (`TryFrom`, `FromStr` with a message naming the range); nothing
+//!   past that point checks a range again.
 //! - [`TailByte`]: the last data byte of every frame: start, end, toggle, transfer-ID.
 //! - [`FrameSplitter`]: an iterator of frames for one transfer, Classic CAN (MTU 8) or CAN FD
 //!   (MTU 64); multi-frame transfers carry a CRC-16/CCITT-FALSE, big-endian, after the padding.
@@ -17,12 +20,14 @@
 
 mod frame;
 mod id;
+mod ids;
 mod rx;
 mod tail;
 mod tx;
 
 pub use frame::{Frame, MAX_DATA_LEN};
 pub use id::{CanId, Priority};
+pub use ids::{IdError, IdKind, NodeId, ServiceId, SubjectId};
 pub use rx::{Reassembler, RxError, RxStats, Subscription, Transfer};
 pub use tail::TailByte;
 pub use tx::{FrameSplitter, TxError};
@@ -68,22 +73,22 @@ impl Mtu {
 pub enum TransferKind {
     /// A message on a subject (broadcast).
     Message {
-        /// Subject-ID, 0..=8191.
-        subject_id: u16,
+        /// Subject-ID.
+        subject_id: SubjectId,
     },
     /// A service request to `destination`.
     Request {
-        /// Service-ID, 0..=511.
-        service_id: u16,
+        /// Service-ID.
+        service_id: ServiceId,
         /// Server node-ID.
-        destination: u8,
+        destination: NodeId,
     },
     /// A service response to `destination`.
     Response {
-        /// Service-ID, 0..=511.
-        service_id: u16,
+        /// Service-ID.
+        service_id: ServiceId,
         /// Client node-ID.
-        destination: u8,
+        destination: NodeId,
     },
 }
 
@@ -103,11 +108,11 @@ impl TransferKind {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Port {
     /// Messages on a subject-ID.
-    Subject(u16),
+    Subject(SubjectId),
     /// Requests to this node on a service-ID.
-    Request(u16),
+    Request(ServiceId),
     /// Responses to this node on a service-ID.
-    Response(u16),
+    Response(ServiceId),
 }
 
 /// Everything about a transfer except its payload.
@@ -119,7 +124,7 @@ pub struct TransferHeader {
     /// Message, request or response, with its port and destination.
     pub kind: TransferKind,
     /// Source node-ID; `None` for anonymous messages.
-    pub source: Option<u8>,
+    pub source: Option<NodeId>,
     /// Transfer-ID modulo 32.
     pub transfer_id: u8,
 }

@@ -18,7 +18,9 @@
 
 use core::time::Duration;
 
-use super::{CanId, Frame, Port, TailByte, TransferHeader, TransferKind, TRANSFER_CRC};
+use super::{
+    CanId, Frame, NodeId, Port, SubjectId, TailByte, TransferHeader, TransferKind, TRANSFER_CRC,
+};
 use crate::time::Instant;
 
 /// A port to receive on.
@@ -99,7 +101,7 @@ impl RxStats {
 
 struct Session<const EXTENT: usize> {
     port: Port,
-    source: u8,
+    source: NodeId,
     last_activity: Instant,
     /// The last delivered transfer-ID and when its transfer started.
     last_delivered: Option<(u8, Instant)>,
@@ -119,7 +121,7 @@ struct Session<const EXTENT: usize> {
 /// Fixed-capacity Cyphal/CAN transfer reassembler: up to `PORTS` subscriptions, `SESSIONS`
 /// concurrent (port, source) sessions, `EXTENT` payload bytes kept per transfer.
 pub struct Reassembler<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize> {
-    local_node_id: Option<u8>,
+    local_node_id: Option<NodeId>,
     subscriptions: heapless::Vec<Subscription, PORTS>,
     sessions: [Option<Session<EXTENT>>; SESSIONS],
     stats: RxStats,
@@ -130,7 +132,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize>
 {
     /// An empty reassembler. Service transfers are accepted only if addressed to
     /// `local_node_id` (none when it is `None`).
-    pub fn new(local_node_id: Option<u8>) -> Self {
+    pub fn new(local_node_id: Option<NodeId>) -> Self {
         Reassembler {
             local_node_id,
             subscriptions: heapless::Vec::new(),
@@ -192,7 +194,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize>
 }
 
 fn accept_frame<'s, const EXTENT: usize>(
-    local_node_id: Option<u8>,
+    local_node_id: Option<NodeId>,
     subscriptions: &[Subscription],
     sessions: &'s mut [Option<Session<EXTENT>>],
     frame: &'s Frame,
@@ -323,7 +325,7 @@ fn accept_frame<'s, const EXTENT: usize>(
 fn session_index<const EXTENT: usize>(
     sessions: &mut [Option<Session<EXTENT>>],
     port: Port,
-    source: u8,
+    source: NodeId,
     now: Instant,
     timeout: Duration,
     is_start: bool,
@@ -360,7 +362,9 @@ fn session_index<const EXTENT: usize>(
         in_progress: false,
         transfer_id: 0,
         priority: super::Priority::NOMINAL,
-        kind: TransferKind::Message { subject_id: 0 },
+        kind: TransferKind::Message {
+            subject_id: SubjectId::from_const(0),
+        },
         started: now,
         next_toggle: true,
         received: 0,
@@ -377,7 +381,7 @@ mod tests {
 
     fn sub(subject: u16) -> Subscription {
         Subscription {
-            port: Port::Subject(subject),
+            port: Port::Subject(SubjectId::from_const(subject)),
             extent: 64,
             transfer_id_timeout: Duration::from_secs(2),
         }
@@ -424,8 +428,10 @@ mod tests {
     fn multi_frame_errors() {
         let header = TransferHeader {
             priority: Priority::NOMINAL,
-            kind: TransferKind::Message { subject_id: 100 },
-            source: Some(42),
+            kind: TransferKind::Message {
+                subject_id: SubjectId::from_const(100),
+            },
+            source: Some(NodeId::from_const(42)),
             transfer_id: 5,
         };
         let payload = [7u8; 20];
@@ -465,8 +471,10 @@ mod tests {
     fn truncates_to_extent_but_checks_crc() {
         let header = TransferHeader {
             priority: Priority::NOMINAL,
-            kind: TransferKind::Message { subject_id: 1 },
-            source: Some(1),
+            kind: TransferKind::Message {
+                subject_id: SubjectId::from_const(1),
+            },
+            source: Some(NodeId::from_const(1)),
             transfer_id: 0,
         };
         let payload: [u8; 30] = core::array::from_fn(|i| i as u8);
@@ -488,9 +496,9 @@ mod tests {
 
     #[test]
     fn services_need_our_address() {
-        let mut r: Reassembler<1, 1, 8> = Reassembler::new(Some(42));
+        let mut r: Reassembler<1, 1, 8> = Reassembler::new(Some(NodeId::from_const(42)));
         r.subscribe(Subscription {
-            port: Port::Request(430),
+            port: Port::Request(crate::can::ServiceId::from_const(430)),
             extent: 0,
             transfer_id_timeout: Duration::from_secs(2),
         })

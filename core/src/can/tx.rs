@@ -16,10 +16,10 @@ pub enum TxError {
     AnonymousMultiFrame,
     /// Anonymous service transfers do not exist.
     AnonymousService,
-    /// A field of the header is out of range (subject-ID, service-ID or node-ID).
-    InvalidHeader,
     /// The transmit queue is full.
     QueueFull,
+    /// Every port slot of the node is taken (transfer-ID counters or response subscriptions).
+    TooManyPorts,
 }
 
 impl core::fmt::Display for TxError {
@@ -27,8 +27,8 @@ impl core::fmt::Display for TxError {
         f.write_str(match self {
             TxError::AnonymousMultiFrame => "anonymous transfers must fit in one frame",
             TxError::AnonymousService => "service transfers cannot be anonymous",
-            TxError::InvalidHeader => "a header field is out of range",
             TxError::QueueFull => "the transmit queue is full",
+            TxError::TooManyPorts => "every port slot of the node is taken",
         })
     }
 }
@@ -81,7 +81,7 @@ impl<'a> FrameSplitter<'a> {
             source: header.source,
         }
         .emit(pseudo_id)
-        .ok_or(TxError::InvalidHeader)?;
+        .ok_or(TxError::AnonymousService)?;
         let (padding, stream_len, crc) = if single_frame {
             let padding = match mtu {
                 Mtu::Classic => 0,
@@ -176,8 +176,10 @@ mod tests {
     fn header(subject_id: u16, tid: u8) -> TransferHeader {
         TransferHeader {
             priority: Priority::NOMINAL,
-            kind: TransferKind::Message { subject_id },
-            source: Some(42),
+            kind: TransferKind::Message {
+                subject_id: crate::can::SubjectId::from_const(subject_id),
+            },
+            source: Some(crate::can::NodeId::from_const(42)),
             transfer_id: tid,
         }
     }

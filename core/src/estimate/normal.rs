@@ -71,8 +71,311 @@ impl<T: RealField + Copy> Compensated<T> {
     }
 }
 
+/// Samples kept raw before their block is summed: an update only stores its sample, and a full
+/// block is summed plainly in the working precision, in one pass with independent partial sums
+/// per lane (so the compiler can use SIMD without reassociating anything), then added to the
+/// compensated totals.
+const BLOCK: usize = 32;
+
+/// The raw samples of the open block, one array per column.
+#[derive(Clone, Copy, Debug)]
+struct Buffer<T, const N: usize> {
+    phi: [[T; BLOCK]; N],
+    y: [T; BLOCK],
+    w: [T; BLOCK],
+    /// Samples stored, 0..BLOCK.
+    len: usize,
+    /// A weight other than 1 is among them.
+    weighted: bool,
+}
+
+/// The plain sums of one block.
+struct BlockSums<T, const N: usize> {
+    phi_phi: [[T; N]; N],
+    phi_y: [T; N],
+    y_y: T,
+    weight: T,
+    /// λ^len: how much the totals decay when this block is added to them.
+    decay: T,
+}
+
+/// Partial sums kept apart while a block is summed: as many as one SIMD register holds (16 bytes
+/// on x86-64 and AArch64), one on a scalar FPU such as the Cortex-M4F's.
+const fn lanes(size_of_t: usize) -> usize {
+    if cfg!(all(target_arch = "arm", not(target_feature = "neon"))) || size_of_t >= 16 {
+        1
+    } else if size_of_t >= 8 {
+        2
+    } else {
+        4
+    }
+}
+
+impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
+    fn empty() -> Self {
+        Buffer {
+            phi: [[T::zero(); BLOCK]; N],
+            y: [T::zero(); BLOCK],
+            w: [T::zero(); BLOCK],
+            len: 0,
+            weighted: false,
+        }
+    }
+
+    /// Sums the first `len` samples; sample k is weighted by w[k]·λ^(len−1−k).
+    #[inline(always)]
+    fn sums(&self, len: usize, lambda: T) -> BlockSums<T, N> {
+        if !self.weighted && lambda == T::one() {
+            let mut out = match lanes(core::mem::size_of::<T>()) {
+                1 => self.pass::<1, false>(&[T::one(); BLOCK], len),
+                2 => self.pass::<2, false>(&[T::one(); BLOCK], len),
+                _ => self.pass::<4, false>(&[T::one(); BLOCK], len),
+            };
+            out.weight = T::from_usize(len).unwrap_or(T::zero());
+            return out;
+        }
+        // Each sample's weight, discounted by its age within the block.
+        let mut s = [T::zero(); BLOCK];
+        let mut f = T::one();
+        for k in (0..len).rev() {
+            s[k] = self.w[k] * f;
+            f *= lambda;
+        }
+        let mut out = match lanes(core::mem::size_of::<T>()) {
+            1 => self.pass::<1, true>(&s, len),
+            2 => self.pass::<2, true>(&s, len),
+            _ => self.pass::<4, true>(&s, len),
+        };
+        out.decay = f;
+        out
+    }
+
+    /// Sums a full block: each entry is a pairwise sum of its 32 products (elementwise array
+    /// operations, which the compiler turns into SIMD without reassociating anything; error
+    /// ~log₂32·ε instead of ~32·ε for a running sum).
+    #[inline(always)]
+    fn full_sums(&self, lambda: T) -> BlockSums<T, N> {
+        let mut out = BlockSums {
+            phi_phi: [[T::zero(); N]; N],
+            phi_y: [T::zero(); N],
+            y_y: T::zero(),
+            weight: T::from_usize(BLOCK).unwrap_or(T::zero()),
+            decay: T::one(),
+        };
+        if !self.weighted && lambda == T::one() {
+            for i in 0..N {
+                for j in i..N {
+                    out.phi_phi[i][j] = pairwise_dot(&self.phi[i], &self.phi[j]);
+                }
+                out.phi_y[i] = pairwise_dot(&self.phi[i], &self.y);
+            }
+            out.y_y = pairwise_dot(&self.y, &self.y);
+            return out;
+        }
+        let mut s = [T::zero(); BLOCK];
+        let mut f = T::one();
+        for k in (0..BLOCK).rev() {
+            s[k] = self.w[k] * f;
+            f *= lambda;
+        }
+        out.decay = f;
+        for i in 0..N {
+            let sphi: [T; BLOCK] = core::array::from_fn(|k| s[k] * self.phi[i][k]);
+            for j in i..N {
+                out.phi_phi[i][j] = pairwise_dot(&sphi, &self.phi[j]);
+            }
+            out.phi_y[i] = pairwise_dot(&sphi, &self.y);
+        }
+        let sy: [T; BLOCK] = core::array::from_fn(|k| s[k] * self.y[k]);
+        out.y_y = pairwise_dot(&sy, &self.y);
+        out.weight = pairwise_sum(s);
+        out
+    }
+
+    /// One pass over the block: L partial sums per entry of the upper triangle of [Φ y]ᵀ[Φ y];
+    /// with `SCALED`, sample k's products are multiplied by s[k].
+    #[inline(always)]
+    fn pass<const L: usize, const SCALED: bool>(
+        &self,
+        s: &[T; BLOCK],
+        len: usize,
+    ) -> BlockSums<T, N> {
+        if N == 3 && L == 1 {
+            return self.pass3::<SCALED>(s, len);
+        }
+        let mut acc = Lanes::<T, N, L>::zero();
+        let whole = len / L * L;
+        let mut k0 = 0;
+        while k0 < whole {
+            acc.add::<L, SCALED>(self, s, k0);
+            k0 += L;
+        }
+        for k in whole..len {
+            acc.add::<1, SCALED>(self, s, k);
+        }
+        acc.fold()
+    }
+
+    /// [`Buffer::pass`] for three regressors and one lane (the load estimator on a scalar FPU),
+    /// written out so the ten running sums stay in registers at any optimisation level.
+    #[inline(always)]
+    fn pass3<const SCALED: bool>(&self, s: &[T; BLOCK], len: usize) -> BlockSums<T, N> {
+        let z = T::zero();
+        let (mut a00, mut a01, mut a02, mut a11, mut a12, mut a22) = (z, z, z, z, z, z);
+        let (mut b0, mut b1, mut b2, mut yy, mut ww) = (z, z, z, z, z);
+        let (p0, p1, p2) = (&self.phi[0], &self.phi[1], &self.phi[2]);
+        for k in 0..len.min(BLOCK) {
+            let (x0, x1, x2, y) = (p0[k], p1[k], p2[k], self.y[k]);
+            let (s0, s1, s2, sy) = if SCALED {
+                let sk = s[k];
+                ww += sk;
+                (sk * x0, sk * x1, sk * x2, sk * y)
+            } else {
+                (x0, x1, x2, y)
+            };
+            a00 += s0 * x0;
+            a01 += s0 * x1;
+            a02 += s0 * x2;
+            a11 += s1 * x1;
+            a12 += s1 * x2;
+            a22 += s2 * x2;
+            b0 += s0 * y;
+            b1 += s1 * y;
+            b2 += s2 * y;
+            yy += sy * y;
+        }
+        let mut out = BlockSums {
+            phi_phi: [[z; N]; N],
+            phi_y: [z; N],
+            y_y: yy,
+            weight: ww,
+            decay: T::one(),
+        };
+        let pp = &mut out.phi_phi;
+        (pp[0][0], pp[0][1], pp[0][2]) = (a00, a01, a02);
+        (pp[1][1], pp[1][2], pp[2][2]) = (a11, a12, a22);
+        (out.phi_y[0], out.phi_y[1], out.phi_y[2]) = (b0, b1, b2);
+        out
+    }
+}
+
+/// `L` independent partial sums of each entry of the upper triangle of [Φ y]ᵀ[Φ y] and of the
+/// weights.
+struct Lanes<T, const N: usize, const L: usize> {
+    pp: [[[T; L]; N]; N],
+    py: [[T; L]; N],
+    yy: [T; L],
+    ww: [T; L],
+}
+
+impl<T: RealField + Copy, const N: usize, const L: usize> Lanes<T, N, L> {
+    #[inline(always)]
+    fn zero() -> Self {
+        Lanes {
+            pp: [[[T::zero(); L]; N]; N],
+            py: [[T::zero(); L]; N],
+            yy: [T::zero(); L],
+            ww: [T::zero(); L],
+        }
+    }
+
+    /// Adds samples k0..k0+W, sample k0+l to lane l.
+    #[inline(always)]
+    fn add<const W: usize, const SCALED: bool>(
+        &mut self,
+        buf: &Buffer<T, N>,
+        s: &[T; BLOCK],
+        k0: usize,
+    ) {
+        for l in 0..W {
+            let k = k0 + l;
+            let y = buf.y[k];
+            let sk = s[k];
+            let sy = if SCALED { sk * y } else { y };
+            for i in 0..N {
+                let zi = buf.phi[i][k];
+                let szi = if SCALED { sk * zi } else { zi };
+                for j in i..N {
+                    self.pp[i][j][l] += szi * buf.phi[j][k];
+                }
+                self.py[i][l] += szi * y;
+            }
+            self.yy[l] += sy * y;
+            if SCALED {
+                self.ww[l] += sk;
+            }
+        }
+    }
+
+    /// Folds the lanes pairwise, the way a SIMD register is folded in halves.
+    #[inline(always)]
+    fn fold(&self) -> BlockSums<T, N> {
+        let f = |v: &[T; L]| {
+            let mut v = *v;
+            let mut width = L;
+            while width > 1 {
+                width /= 2;
+                for l in 0..width {
+                    v[l] += v[l + width];
+                }
+            }
+            v[0]
+        };
+        let mut out = BlockSums {
+            phi_phi: [[T::zero(); N]; N],
+            phi_y: [T::zero(); N],
+            y_y: f(&self.yy),
+            weight: f(&self.ww),
+            decay: T::one(),
+        };
+        for i in 0..N {
+            for j in i..N {
+                out.phi_phi[i][j] = f(&self.pp[i][j]);
+            }
+            out.phi_y[i] = f(&self.py[i]);
+        }
+        out
+    }
+}
+
+/// Σₖ a[k]·b[k] over a full block, summed pairwise.
+#[inline(always)]
+fn pairwise_dot<T: RealField + Copy>(a: &[T; BLOCK], b: &[T; BLOCK]) -> T {
+    pairwise_sum(core::array::from_fn(|k| a[k] * b[k]))
+}
+
+/// Σₖ p[k], pairwise: p[k] += p[k + w] for w = 16, 8, 4, 2, 1.
+#[inline(always)]
+fn pairwise_sum<T: RealField + Copy>(mut p: [T; BLOCK]) -> T {
+    let mut w = BLOCK / 2;
+    while w > 0 {
+        for k in 0..w {
+            p[k] += p[k + w];
+        }
+        w /= 2;
+    }
+    p[0]
+}
+
+/// The sums folded into plain values, for solving.
+struct Sums<T, const N: usize> {
+    /// ΦᵀΦ, full.
+    a: [[T; N]; N],
+    /// Φᵀy.
+    b: [T; N],
+    /// yᵀy.
+    y_y: T,
+    /// Σ weights.
+    n: T,
+}
+
 /// Incremental normal equations of a linear least-squares problem y ≈ φᵀθ with `N` regressors,
 /// in fixed memory.
+///
+/// An update stores its sample in a block of 32; a full block is summed plainly (the upper
+/// triangle of ΦᵀΦ, Φᵀy, yᵀy, the weight) and added to Kahan-compensated totals, so the
+/// compensation costs once per block instead of once per sample. Reading (`matrix`, `solve`, …)
+/// folds the open block in without changing the state.
 #[derive(Clone, Copy, Debug)]
 pub struct NormalEquations<T, const N: usize> {
     /// ΦᵀΦ (upper triangle used).
@@ -83,6 +386,8 @@ pub struct NormalEquations<T, const N: usize> {
     y_y: Compensated<T>,
     /// Σ weights (sample count without forgetting).
     weight: Compensated<T>,
+    /// The samples not yet in the totals.
+    buffer: Buffer<T, N>,
     /// Forgetting factor λ ∈ (0, 1]; 1 keeps every sample forever.
     forgetting: T,
 }
@@ -101,6 +406,7 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             phi_y: [Compensated::zero(); N],
             y_y: Compensated::zero(),
             weight: Compensated::zero(),
+            buffer: Buffer::empty(),
             forgetting: T::one(),
         }
     }
@@ -114,38 +420,91 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
     }
 
     /// Adds one sample with unit weight.
+    #[inline]
     pub fn update(&mut self, phi: &[T; N], y: T) {
-        self.update_weighted(phi, y, T::one());
+        let b = &mut self.buffer;
+        // `len < BLOCK` always; the mask lets the compiler drop the bounds checks.
+        let k = b.len & (BLOCK - 1);
+        for i in 0..N {
+            b.phi[i][k] = phi[i];
+        }
+        b.y[k] = y;
+        b.w[k] = T::one();
+        b.len = k + 1;
+        if b.len == BLOCK {
+            self.flush();
+        }
     }
 
     /// Adds one sample with weight `w`.
+    #[inline]
     pub fn update_weighted(&mut self, phi: &[T; N], y: T, w: T) {
-        if self.forgetting != T::one() {
-            let k = self.forgetting;
-            for row in &mut self.phi_phi {
-                for c in row.iter_mut() {
-                    c.scale(k);
-                }
-            }
-            for c in &mut self.phi_y {
-                c.scale(k);
-            }
-            self.y_y.scale(k);
-            self.weight.scale(k);
-        }
+        let b = &mut self.buffer;
+        let k = b.len & (BLOCK - 1);
         for i in 0..N {
-            let wi = w * phi[i];
-            for j in i..N {
-                self.phi_phi[i][j].add(wi * phi[j]);
-            }
-            self.phi_y[i].add(wi * y);
+            b.phi[i][k] = phi[i];
         }
-        self.y_y.add(w * y * y);
-        self.weight.add(w);
+        b.y[k] = y;
+        b.w[k] = w;
+        b.weighted |= w != T::one();
+        b.len = k + 1;
+        if b.len == BLOCK {
+            self.flush();
+        }
+    }
+
+    /// Adds the full block to the compensated totals.
+    #[inline(never)]
+    fn flush(&mut self) {
+        // With SIMD, pairwise sums over the block; on a scalar FPU, one pass with the running
+        // sums in registers is cheaper.
+        let sums = if lanes(core::mem::size_of::<T>()) == 1 {
+            self.buffer.sums(BLOCK, self.forgetting)
+        } else {
+            self.buffer.full_sums(self.forgetting)
+        };
+        self.buffer.len = 0;
+        self.buffer.weighted = false;
+        self.fold(&sums);
+    }
+
+    /// totals ← λ^len · totals + block.
+    fn fold(&mut self, b: &BlockSums<T, N>) {
+        let scale = b.decay != T::one();
+        for i in 0..N {
+            for j in i..N {
+                if scale {
+                    self.phi_phi[i][j].scale(b.decay);
+                }
+                self.phi_phi[i][j].add(b.phi_phi[i][j]);
+            }
+            if scale {
+                self.phi_y[i].scale(b.decay);
+            }
+            self.phi_y[i].add(b.phi_y[i]);
+        }
+        if scale {
+            self.y_y.scale(b.decay);
+            self.weight.scale(b.decay);
+        }
+        self.y_y.add(b.y_y);
+        self.weight.add(b.weight);
+    }
+
+    /// A copy with the open block folded into the totals.
+    fn folded(&self) -> Self {
+        let mut f = *self;
+        let sums = self.buffer.sums(self.buffer.len, self.forgetting);
+        f.buffer.len = 0;
+        f.buffer.weighted = false;
+        f.fold(&sums);
+        f
     }
 
     /// Adds the samples of `other` (as if they had been given to `self`).
     pub fn merge(&mut self, other: &Self) {
+        *self = self.folded();
+        let other = other.folded();
         for i in 0..N {
             for j in i..N {
                 self.phi_phi[i][j].merge(&other.phi_phi[i][j]);
@@ -156,38 +515,70 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
         self.weight.merge(&other.weight);
     }
 
+    /// The folded sums as plain values.
+    fn sums(&self) -> Sums<T, N> {
+        let f = self.folded();
+        let mut a = [[T::zero(); N]; N];
+        for i in 0..N {
+            for j in i..N {
+                a[i][j] = f.phi_phi[i][j].sum;
+                a[j][i] = f.phi_phi[i][j].sum;
+            }
+        }
+        Sums {
+            a,
+            b: core::array::from_fn(|i| f.phi_y[i].sum),
+            y_y: f.y_y.sum,
+            n: f.weight.sum,
+        }
+    }
+
     /// Effective number of samples.
     pub fn count(&self) -> T {
-        self.weight.sum
+        self.sums().n
     }
 
     /// ΦᵀΦ as a full symmetric matrix.
     pub fn matrix(&self) -> [[T; N]; N] {
-        let mut m = [[T::zero(); N]; N];
-        for i in 0..N {
-            for j in i..N {
-                m[i][j] = self.phi_phi[i][j].sum;
-                m[j][i] = self.phi_phi[i][j].sum;
-            }
-        }
-        m
+        self.sums().a
     }
 
     /// Φᵀy.
     pub fn vector(&self) -> [T; N] {
-        core::array::from_fn(|i| self.phi_y[i].sum)
+        self.sums().b
     }
 
     /// Σ y².
     pub fn sum_y_squared(&self) -> T {
-        self.y_y.sum
+        self.sums().y_y
     }
 
     /// The residual sum of squares at θ: yᵀy − 2θᵀΦᵀy + θᵀΦᵀΦθ (never negative).
     pub fn residual_sum_of_squares(&self, theta: &[T; N]) -> T {
-        let a = self.matrix();
-        let b = self.vector();
-        let mut ss = self.y_y.sum;
+        self.sums().residual_sum_of_squares(theta)
+    }
+
+    /// Unconstrained least squares.
+    pub fn solve(&self) -> Result<Solution<T, N>, SolveError> {
+        self.sums().solve()
+    }
+
+    /// Least squares subject to `M` linear inequalities g_kᵀθ ≤ h_k, exactly (see the module
+    /// documentation). `M` must be at most 8.
+    pub fn solve_constrained<const M: usize>(
+        &self,
+        g: &[[T; N]; M],
+        h: &[T; M],
+    ) -> Result<Solution<T, N>, SolveError> {
+        self.sums().solve_constrained(g, h)
+    }
+}
+
+impl<T: RealField + Copy, const N: usize> Sums<T, N> {
+    /// The residual sum of squares at θ: yᵀy − 2θᵀΦᵀy + θᵀΦᵀΦθ (never negative).
+    fn residual_sum_of_squares(&self, theta: &[T; N]) -> T {
+        let (a, b) = (&self.a, &self.b);
+        let mut ss = self.y_y;
         for i in 0..N {
             ss -= (b[i] + b[i]) * theta[i];
             for j in 0..N {
@@ -205,7 +596,7 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
     fn scales(&self) -> Result<[T; N], SolveError> {
         let mut d = [T::one(); N];
         for (i, di) in d.iter_mut().enumerate() {
-            let aii = self.phi_phi[i][i].sum;
+            let aii = self.a[i][i];
             if aii <= T::zero() || !aii.is_finite() {
                 return Err(SolveError::NoExcitation { regressor: i });
             }
@@ -215,19 +606,19 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
     }
 
     fn scaled_matrix(&self, d: &[T; N]) -> SMatrix<T, N, N> {
-        let a = self.matrix();
+        let a = &self.a;
         SMatrix::<T, N, N>::from_fn(|i, j| a[i][j] * d[i] * d[j])
     }
 
     /// Unconstrained least squares.
-    pub fn solve(&self) -> Result<Solution<T, N>, SolveError> {
-        if self.weight.sum < T::from_usize(N).unwrap_or(T::one()) {
+    fn solve(&self) -> Result<Solution<T, N>, SolveError> {
+        if self.n < T::from_usize(N).unwrap_or(T::one()) {
             return Err(SolveError::TooFewSamples);
         }
         let d = self.scales()?;
         let s = self.scaled_matrix(&d);
         let chol = nalgebra::Cholesky::new(s).ok_or(SolveError::Singular)?;
-        let b = self.vector();
+        let b = self.b;
         let sb = SVector::<T, N>::from_fn(|i, _| b[i] * d[i]);
         let z = chol.solve(&sb);
         let theta: [T; N] = core::array::from_fn(|i| z[i] * d[i]);
@@ -239,18 +630,18 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
 
     /// Least squares subject to `M` linear inequalities g_kᵀθ ≤ h_k, exactly (see the module
     /// documentation). `M` must be at most 8.
-    pub fn solve_constrained<const M: usize>(
+    fn solve_constrained<const M: usize>(
         &self,
         g: &[[T; N]; M],
         h: &[T; M],
     ) -> Result<Solution<T, N>, SolveError> {
         const { assert!(M <= 8, "at most 8 constraints") };
-        if self.weight.sum < T::from_usize(N).unwrap_or(T::one()) {
+        if self.n < T::from_usize(N).unwrap_or(T::one()) {
             return Err(SolveError::TooFewSamples);
         }
         let d = self.scales()?;
         let s = self.scaled_matrix(&d);
-        let b = self.vector();
+        let b = self.b;
         // In scaled variables z = θ / d: minimise ½zᵀSz − (Db)ᵀz subject to (g∘d)ᵀz ≤ h.
         // Each constraint row is normalised so the KKT system is well scaled.
         let mut gs: [[T; N]; M] =
@@ -308,7 +699,7 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
         gs: &[[T; N]; M],
         active: u32,
     ) -> Solution<T, N> {
-        let n = self.weight.sum;
+        let n = self.n;
         let ss = self.residual_sum_of_squares(&theta);
         let free = N - (active.count_ones() as usize).min(N);
         let dof = n - T::from_usize(free).unwrap_or(T::zero());
@@ -457,6 +848,59 @@ mod tests {
         }
         assert!(sol.rms < 1e-9);
         assert!(sol.condition_number < 10.0);
+    }
+
+    #[test]
+    fn blocks_weights_and_forgetting_match_a_direct_sum() {
+        // 100 samples: three full blocks and an open one; weights and forgetting on.
+        let lambda = 0.99;
+        let mut ne = NormalEquations::<f64, 3>::with_forgetting(lambda);
+        let mut direct = [[0.0; 3]; 3];
+        let mut s = 3u64;
+        for k in 0..100 {
+            let phi = [lcg(&mut s), lcg(&mut s), lcg(&mut s)];
+            let w = if k % 7 == 0 { 2.5 } else { 1.0 };
+            ne.update_weighted(&phi, 0.0, w);
+            for row in direct.iter_mut() {
+                for v in row.iter_mut() {
+                    *v *= lambda;
+                }
+            }
+            for i in 0..3 {
+                for j in 0..3 {
+                    direct[i][j] += w * phi[i] * phi[j];
+                }
+            }
+            if k == 40 || k == 99 {
+                let m = ne.matrix();
+                for i in 0..3 {
+                    for j in 0..3 {
+                        assert!((m[i][j] - direct[i][j]).abs() < 1e-13, "{k} {i}{j}");
+                    }
+                }
+            }
+        }
+        let expected_weight = (0..100)
+            .map(|k| if k % 7 == 0 { 2.5 } else { 1.0 } * lambda.powi(99 - k))
+            .sum::<f64>();
+        assert!((ne.count() - expected_weight).abs() < 1e-12);
+        // Merging an open block into a half-full one equals feeding both in order.
+        let mut a = NormalEquations::<f64, 2>::new();
+        let mut b = NormalEquations::<f64, 2>::new();
+        let mut all = NormalEquations::<f64, 2>::new();
+        for k in 0..50 {
+            let phi = [k as f64, 1.0];
+            if k < 20 {
+                a.update(&phi, 2.0)
+            } else {
+                b.update(&phi, 2.0)
+            }
+            all.update(&phi, 2.0);
+        }
+        a.merge(&b);
+        assert_eq!(a.matrix(), all.matrix());
+        assert_eq!(a.vector(), all.vector());
+        assert_eq!(a.count(), 50.0);
     }
 
     #[test]

@@ -4,8 +4,8 @@
 //!  handle_frame(now, frame) ──► Reassembler ──► GetInfo request? → response queued
 //!                                           └─► Event::Message / Event::Response to the caller
 //!  publish(now, subject, payload) / request(now, service, server, payload)
-//!        ──► FrameSplitter ──► transmit queue (deadlines) ──► poll_transmit(now) → Frame
-//!  poll_timeout() → when to come back (the next heartbeat)
+//!        ──► FrameSplitter ──► TxQueue (priority, deadlines, supersede) ──► poll_transmit(now) → Frame
+//!  poll_timeout() → when to come back: now while frames wait, else the next heartbeat
 //! ```
 //! The node publishes `uavcan.node.Heartbeat.1.0` once a second (uptime, health, mode) and
 //! answers `uavcan.node.GetInfo.1.0` requests addressed to it with its name and version. Every
@@ -13,21 +13,37 @@
 //! parameters: `PORTS` subscriptions, `SESSIONS` receive sessions, `EXTENT` bytes per received
 //! transfer, `QUEUE` frames waiting to be sent. Nothing here reads a clock or touches a device, so
 //! two nodes can be driven through a simulated link with a virtual clock (see `tests/node_link.rs`).
+//!
+//! Frames leave through a [`TxQueue`]: in Cyphal priority order, each before its deadline or
+//! never, a newer message superseding an unsent one on the same subject, a full queue refusing
+//! (counted) rather than blocking. [`Node::purge_transmit`] empties it, so a stop sequence can put
+//! its last commands first in line.
 
 use core::time::Duration;
 
+mod status;
+mod tx_queue;
+
+pub use status::{Health, Mode};
+pub use tx_queue::{TxQueue, TxStats};
+
 use crate::can::{
-    Frame, FrameSplitter, Mtu, Port, Priority, Reassembler, RxStats, Subscription, TransferHeader,
-    TransferKind, TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
+    Frame, Mtu, NodeId, Port, Priority, Reassembler, RxStats, ServiceId, SubjectId, Subscription,
+    TransferHeader, TransferKind, TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
 };
-use crate::dsdl::{DataType, GetInfoResponse, Heartbeat, Version, GET_INFO_SERVICE_ID};
+use crate::dsdl::{DataType, GetInfoResponse, Heartbeat, Version};
+
+/// `uavcan.node.Heartbeat.1.0`'s fixed subject.
+const HEARTBEAT_SUBJECT: SubjectId = SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID);
+/// `uavcan.node.GetInfo.1.0`'s fixed service.
+const GET_INFO_SERVICE: ServiceId = ServiceId::from_const(crate::dsdl::GET_INFO_SERVICE_ID);
 use crate::time::Instant;
 
 /// Who the node is.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NodeConfig {
-    /// Node-ID, 0..=127.
-    pub node_id: u8,
+    /// Node-ID.
+    pub node_id: NodeId,
     /// Name reported by GetInfo (reverse-domain style), at most 50 bytes.
     pub name: heapless::Vec<u8, 50>,
     /// Software version reported by GetInfo.
@@ -40,13 +56,13 @@ pub struct NodeConfig {
 
 impl NodeConfig {
     /// A configuration with the given ID and name (truncated to 50 bytes), version 0.1.
-    pub fn new(node_id: u8, name: &str, mtu: Mtu) -> Self {
+    pub fn new(node_id: NodeId, name: &str, mtu: Mtu) -> Self {
         let bytes = name.as_bytes();
         NodeConfig {
             node_id,
             name: heapless::Vec::from_slice(&bytes[..bytes.len().min(50)]).unwrap_or_default(),
             software_version: Version { major: 0, minor: 1 },
-            unique_id: [node_id; 16],
+            unique_id: [node_id.get(); 16],
             mtu,
         }
     }
@@ -58,9 +74,9 @@ pub enum Event<'a> {
     /// A message on a subscribed subject.
     Message {
         /// Subject-ID.
-        subject_id: u16,
+        subject_id: SubjectId,
         /// Publisher (`None`: anonymous).
-        source: Option<u8>,
+        source: Option<NodeId>,
         /// Transfer-ID.
         transfer_id: u8,
         /// Priority.
@@ -73,9 +89,9 @@ pub enum Event<'a> {
     /// A response to a request this node made.
     Response {
         /// Service-ID.
-        service_id: u16,
+        service_id: ServiceId,
         /// Server node-ID.
-        source: u8,
+        source: NodeId,
         /// Transfer-ID (that of the request).
         transfer_id: u8,
         /// Time of its first frame.
@@ -91,8 +107,6 @@ pub enum Event<'a> {
 pub enum NodeError {
     /// All subscription slots are taken.
     TooManyPorts,
-    /// A port-ID out of range.
-    InvalidPort,
 }
 
 /// Counters.
@@ -100,10 +114,8 @@ pub enum NodeError {
 pub struct NodeStats {
     /// Receive-side counters.
     pub rx: RxStats,
-    /// Frames dropped because they waited past their deadline.
-    pub tx_expired: u64,
-    /// Transfers refused because the queue was full.
-    pub tx_queue_full: u64,
+    /// Transmit-side counters: sent, expired, superseded, displaced, refused, purged.
+    pub tx: TxStats,
     /// Heartbeats published.
     pub heartbeats: u64,
     /// GetInfo requests answered.
@@ -119,11 +131,11 @@ pub struct Node<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, 
     config: NodeConfig,
     started: Instant,
     next_heartbeat: Instant,
-    health: u8,
-    mode: u8,
+    health: Health,
+    mode: Mode,
     vendor_status: u8,
     rx: Reassembler<PORTS, SESSIONS, EXTENT>,
-    queue: heapless::Deque<(Frame, Instant), QUEUE>,
+    queue: TxQueue<QUEUE>,
     transfer_ids: heapless::LinearMap<(bool, u16), u8, PORTS>,
     heartbeat_tid: u8,
     stats: NodeStats,
@@ -139,7 +151,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         let mut rx = Reassembler::new(Some(config.node_id));
         // GetInfo requests are empty; a slot for them always exists when PORTS ≥ 1.
         let _ = rx.subscribe(Subscription {
-            port: Port::Request(GET_INFO_SERVICE_ID),
+            port: Port::Request(GET_INFO_SERVICE),
             extent: 0,
             transfer_id_timeout: DEFAULT_TRANSFER_ID_TIMEOUT,
         });
@@ -147,11 +159,11 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
             config,
             started: now,
             next_heartbeat: now,
-            health: Heartbeat::HEALTH_NOMINAL,
-            mode: Heartbeat::MODE_OPERATIONAL,
+            health: Health::Nominal,
+            mode: Mode::Operational,
             vendor_status: 0,
             rx,
-            queue: heapless::Deque::new(),
+            queue: TxQueue::new(),
             transfer_ids: heapless::LinearMap::new(),
             heartbeat_tid: 0,
             stats: NodeStats::default(),
@@ -164,26 +176,56 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         &self.config
     }
 
-    /// Sets what the heartbeat reports.
-    pub fn set_status(&mut self, health: u8, mode: u8, vendor_status: u8) {
+    /// Sets what the heartbeats report from the next one on (a node starts `Nominal`,
+    /// `Operational`, vendor status 0).
+    pub fn set_status(&mut self, health: Health, mode: Mode, vendor_status: u8) {
         self.health = health;
         self.mode = mode;
         self.vendor_status = vendor_status;
+    }
+
+    /// What the heartbeats report: health, mode, vendor status.
+    pub fn status(&self) -> (Health, Mode, u8) {
+        (self.health, self.mode, self.vendor_status)
     }
 
     /// Counters so far.
     pub fn stats(&self) -> NodeStats {
         NodeStats {
             rx: self.rx.stats(),
+            tx: self.queue.stats(),
             ..self.stats
         }
     }
 
+    /// Frames waiting to be sent.
+    pub fn transmit_queue_len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// True if no frame is waiting to be sent.
+    pub fn is_transmit_queue_empty(&self) -> bool {
+        self.queue.is_empty()
+    }
+
+    /// Frames of messages on `subject_id` waiting to be sent.
+    pub fn pending_frames(&self, subject_id: SubjectId) -> usize {
+        self.queue.pending_frames(subject_id)
+    }
+
+    /// Drops every frame waiting to be sent, the rest of a transfer in progress included
+    /// (counted in [`TxStats::purged`]); returns how many. A stop sequence calls this, then
+    /// publishes its last commands, which are then first in line.
+    pub fn purge_transmit(&mut self) -> usize {
+        self.queue.purge()
+    }
+
     /// Receives messages on `subject_id`, keeping up to `extent` payload bytes.
-    pub fn subscribe_message(&mut self, subject_id: u16, extent: usize) -> Result<(), NodeError> {
-        if subject_id > 8191 {
-            return Err(NodeError::InvalidPort);
-        }
+    pub fn subscribe_message(
+        &mut self,
+        subject_id: SubjectId,
+        extent: usize,
+    ) -> Result<(), NodeError> {
         self.rx
             .subscribe(Subscription {
                 port: Port::Subject(subject_id),
@@ -201,7 +243,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         }
         self.transfer_ids
             .insert((service, port), 1)
-            .map_err(|_| TxError::QueueFull)?;
+            .map_err(|_| TxError::TooManyPorts)?;
         Ok(0)
     }
 
@@ -212,31 +254,23 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         now: Instant,
         deadline: Instant,
     ) -> Result<(), TxError> {
-        let frames = FrameSplitter::new(header, payload, self.config.mtu, now)?;
-        if self.queue.capacity() - self.queue.len() < frames.frame_count() {
-            self.stats.tx_queue_full += 1;
-            return Err(TxError::QueueFull);
-        }
-        for f in frames {
-            // Room was checked above.
-            let _ = self.queue.push_back((f, deadline));
-        }
-        Ok(())
+        self.now = self.now.max(now);
+        self.queue
+            .push(now, header, payload, self.config.mtu, deadline)
     }
 
     /// Publishes `payload` on `subject_id`; its frames are dropped if not sent within `timeout`.
+    /// It supersedes a queued transfer on the same subject none of whose frames has left yet.
+    /// A full queue refuses it with [`TxError::QueueFull`] (counted in [`TxStats::refused`]).
     pub fn publish(
         &mut self,
         now: Instant,
-        subject_id: u16,
+        subject_id: SubjectId,
         priority: Priority,
         payload: &[u8],
         timeout: Duration,
     ) -> Result<(), TxError> {
-        if subject_id > 8191 {
-            return Err(TxError::InvalidHeader);
-        }
-        let transfer_id = self.next_transfer_id(false, subject_id)?;
+        let transfer_id = self.next_transfer_id(false, subject_id.get())?;
         let header = TransferHeader {
             priority,
             kind: TransferKind::Message { subject_id },
@@ -250,7 +284,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn publish_message<T: DataType>(
         &mut self,
         now: Instant,
-        subject_id: u16,
+        subject_id: SubjectId,
         priority: Priority,
         message: &T,
         timeout: Duration,
@@ -265,23 +299,20 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn request(
         &mut self,
         now: Instant,
-        service_id: u16,
-        server: u8,
+        service_id: ServiceId,
+        server: NodeId,
         payload: &[u8],
         response_extent: usize,
         timeout: Duration,
     ) -> Result<u8, TxError> {
-        if service_id > 511 || server > 127 {
-            return Err(TxError::InvalidHeader);
-        }
         self.rx
             .subscribe(Subscription {
                 port: Port::Response(service_id),
                 extent: response_extent,
                 transfer_id_timeout: DEFAULT_TRANSFER_ID_TIMEOUT,
             })
-            .map_err(|_| TxError::QueueFull)?;
-        let transfer_id = self.next_transfer_id(true, service_id)?;
+            .map_err(|_| TxError::TooManyPorts)?;
+        let transfer_id = self.next_transfer_id(true, service_id.get())?;
         let header = TransferHeader {
             priority: Priority::NOMINAL,
             kind: TransferKind::Request {
@@ -299,7 +330,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     pub fn handle_frame<'s>(&'s mut self, now: Instant, frame: &'s Frame) -> Option<Event<'s>> {
         self.now = self.now.max(now);
         let get_info = crate::can::CanId::parse(frame.id()).is_some_and(|id| {
-            matches!(id.kind, TransferKind::Request { service_id, .. } if service_id == GET_INFO_SERVICE_ID)
+            matches!(id.kind, TransferKind::Request { service_id, .. } if service_id == GET_INFO_SERVICE)
         });
         if get_info {
             let header = self.rx.accept(frame).ok()??.header;
@@ -330,7 +361,13 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         }
     }
 
-    fn answer_get_info(&mut self, now: Instant, client: u8, transfer_id: u8, priority: Priority) {
+    fn answer_get_info(
+        &mut self,
+        now: Instant,
+        client: NodeId,
+        transfer_id: u8,
+        priority: Priority,
+    ) {
         let info = GetInfoResponse {
             protocol_version: Version { major: 1, minor: 0 },
             hardware_version: Version { major: 0, minor: 0 },
@@ -346,7 +383,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         let header = TransferHeader {
             priority,
             kind: TransferKind::Response {
-                service_id: GET_INFO_SERVICE_ID,
+                service_id: GET_INFO_SERVICE,
                 destination: client,
             },
             source: Some(self.config.node_id),
@@ -360,15 +397,17 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
         }
     }
 
-    /// The next frame to send, if any is due. Publishes the heartbeat when it is time.
+    /// The next frame to send, if any is due. Publishes the heartbeat when it is time. Frames
+    /// leave in priority order; one whose deadline has passed is dropped (counted), never returned.
+    #[must_use]
     pub fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
         self.now = self.now.max(now);
         if now >= self.next_heartbeat {
             let uptime = now.saturating_duration_since(self.started).as_secs();
             let hb = Heartbeat {
                 uptime: u32::try_from(uptime).unwrap_or(u32::MAX),
-                health: self.health,
-                mode: self.mode,
+                health: self.health as u8,
+                mode: self.mode as u8,
                 vendor_specific_status_code: self.vendor_status,
             };
             let mut buf = [0u8; 7];
@@ -376,7 +415,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
             let header = TransferHeader {
                 priority: Priority::NOMINAL,
                 kind: TransferKind::Message {
-                    subject_id: Heartbeat::FIXED_SUBJECT_ID,
+                    subject_id: HEARTBEAT_SUBJECT,
                 },
                 source: Some(self.config.node_id),
                 transfer_id: self.heartbeat_tid,
@@ -394,19 +433,12 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
                 self.next_heartbeat = now + Duration::from_secs(1);
             }
         }
-        while let Some((mut frame, deadline)) = self.queue.pop_front() {
-            if now > deadline {
-                self.stats.tx_expired += 1;
-                continue;
-            }
-            frame.timestamp = now;
-            return Some(frame);
-        }
-        None
+        self.queue.pop(now)
     }
 
-    /// When to call [`Node::poll_transmit`] next: now if frames are waiting, else at the next
-    /// heartbeat.
+    /// When to call [`Node::poll_transmit`] next: the latest time given if frames are waiting
+    /// (one is ready, or an expired one is to be dropped), else the next heartbeat.
+    #[must_use]
     pub fn poll_timeout(&self) -> Option<Instant> {
         if self.queue.is_empty() {
             Some(self.next_heartbeat)

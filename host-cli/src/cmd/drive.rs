@@ -7,6 +7,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anyhow::Context;
+use propid_core::can::{NodeId, SubjectId};
 use propid_drive::drive::{drive, DriveConfig, DriveEvent, StopReason, STOP_REPEATS};
 use propid_science::excitation::{Excitation, Pattern};
 
@@ -17,20 +18,20 @@ use crate::InputError;
 pub struct Args {
     /// This node's ID (register uavcan.node.id).
     #[arg(long, env = "UAVCAN__NODE__ID")]
-    pub node_id: Option<u8>,
+    pub node_id: Option<NodeId>,
     /// The bus.
     #[command(flatten)]
     pub bus: crate::bus::BusArgs,
     /// Subject-ID of the readiness publisher; no readiness is published when unset
     /// (uavcan.pub.readiness.id).
     #[arg(long, env = "UAVCAN__PUB__READINESS__ID")]
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id).
     #[arg(long, env = "UAVCAN__PUB__SP_RAT__ID")]
-    pub setpoint_id: Option<u16>,
+    pub setpoint_id: Option<SubjectId>,
     /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id).
     #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
-    pub feedback_id: Option<u16>,
+    pub feedback_id: Option<SubjectId>,
     /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi).
     #[arg(long, env = "SETPOINT_RAT_LO_HI", default_value = "0.1 0.9")]
     pub setpoint_rat_lo_hi: String,
@@ -66,7 +67,7 @@ pub struct Args {
 impl Args {
     /// The validated configuration these arguments (and the register variables) describe.
     pub fn config(&self) -> Result<DriveConfig, InputError> {
-        let need = |v: Option<u16>, flag: &str, var: &str, what: &str| {
+        let need = |v: Option<SubjectId>, flag: &str, var: &str, what: &str| {
             v.ok_or_else(|| InputError(format!("{what} is not set: give --{flag} or {var}")))
         };
         let node_id = self.node_id.ok_or_else(|| {

@@ -4,6 +4,7 @@ use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
 use anyhow::Context;
+use propid_core::can::SubjectId;
 use propid_io::candump::replay;
 
 use crate::InputError;
@@ -15,7 +16,7 @@ pub struct Args {
     pub file: PathBuf,
     /// Subject-ID of the dynamics feedback.
     #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
-    pub feedback_id: u16,
+    pub feedback_id: SubjectId,
     /// Output TSV (standard output if omitted).
     #[arg(short, long)]
     pub output: Option<PathBuf>,

@@ -4,6 +4,7 @@
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
+use propid_core::can::{NodeId, SubjectId};
 use propid_core::dsdl::Readiness;
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
 
@@ -14,20 +15,20 @@ use crate::InputError;
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
     /// This node's ID.
-    #[arg(long, env = "UAVCAN__NODE__ID", default_value_t = 42)]
-    pub node_id: u8,
+    #[arg(long, env = "UAVCAN__NODE__ID", default_value = "42")]
+    pub node_id: NodeId,
     /// The bus.
     #[command(flatten)]
     pub bus: crate::bus::BusArgs,
     /// Readiness subject (no readiness gating when unset).
     #[arg(long, env = "UAVCAN__SUB__READINESS__ID")]
-    pub readiness_id: Option<u16>,
+    pub readiness_id: Option<SubjectId>,
     /// Ratiometric setpoint subject.
-    #[arg(long, env = "UAVCAN__SUB__SP_RAT__ID", default_value_t = 24)]
-    pub setpoint_id: u16,
+    #[arg(long, env = "UAVCAN__SUB__SP_RAT__ID", default_value = "24")]
+    pub setpoint_id: SubjectId,
     /// Dynamics feedback subject.
-    #[arg(long, env = "UAVCAN__PUB__FB_DYN__ID", default_value_t = 110)]
-    pub feedback_id: u16,
+    #[arg(long, env = "UAVCAN__PUB__FB_DYN__ID", default_value = "110")]
+    pub feedback_id: SubjectId,
     /// Feedback interval [s].
     #[arg(long, default_value_t = 0.002)]
     pub interval: f64,
