@@ -112,14 +112,210 @@ pub enum TsvError {
     },
 }
 
+/// Where the columns are in a row, found from the header: the byte-level row parser behind
+/// [`TsvReader`], also usable on a memory-mapped file split among threads (lines are
+/// independent).
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// Field indices of ts_local, t, force, velocity, acceleration, position.
+    idx: [Option<usize>; 6],
+    /// For each field index up to the last used one, the slot it fills (`NONE` if unused).
+    slot_of: Vec<u8>,
+}
+
+const NONE: u8 = u8::MAX;
+
+/// Why one row could not be parsed (the caller adds the file and line: [`RowError::at`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum RowError {
+    /// A used field is not a number.
+    NotANumber {
+        /// Slot in [`HEADER`].
+        slot: usize,
+        /// The offending text (shortened).
+        text: String,
+    },
+    /// The row ends before a required column.
+    ShortRow {
+        /// Slot in [`HEADER`].
+        slot: usize,
+        /// Fields present.
+        found: usize,
+        /// 1-based index of the column.
+        needed: usize,
+    },
+}
+
+impl RowError {
+    /// The error with its place.
+    pub fn at(self, source_name: &str, line: u64) -> TsvError {
+        match self {
+            RowError::NotANumber { slot, text } => TsvError::NotANumber {
+                source_name: source_name.to_string(),
+                line,
+                column: HEADER[slot].to_string(),
+                text,
+            },
+            RowError::ShortRow {
+                slot,
+                found,
+                needed,
+            } => TsvError::ShortRow {
+                source_name: source_name.to_string(),
+                line,
+                column: HEADER[slot].to_string(),
+                found,
+                needed,
+            },
+        }
+    }
+}
+
+/// The bytes `str::trim` removes that are ASCII (Unicode White_Space below 0x80).
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\n' | 0x0B | 0x0C | b'\r')
+}
+
+fn trim_bytes(mut f: &[u8]) -> &[u8] {
+    while let [first, rest @ ..] = f {
+        if !is_space(*first) {
+            break;
+        }
+        f = rest;
+    }
+    while let [rest @ .., last] = f {
+        if !is_space(*last) {
+            break;
+        }
+        f = rest;
+    }
+    f
+}
+
+/// Parses one field's bytes like [`parse_field`] (the same values are accepted and the same
+/// floats result: fast-float2 rounds correctly, as std does; anything it refuses, such as
+/// Unicode spaces around a number, goes through std).
+fn parse_field_bytes(field: &[u8]) -> Option<f64> {
+    let f = trim_bytes(field);
+    if f.is_empty() {
+        return Some(f64::NAN);
+    }
+    match fast_float2::parse::<f64, _>(f) {
+        Ok(v) => Some(v),
+        Err(_) => parse_field(std::str::from_utf8(field).ok()?),
+    }
+}
+
+impl Layout {
+    fn new(idx: [Option<usize>; 6]) -> Self {
+        let last = idx.iter().flatten().copied().max().unwrap_or(0);
+        let mut slot_of = vec![NONE; last + 1];
+        for (slot, i) in idx.iter().enumerate() {
+            if let Some(i) = i {
+                slot_of[*i] = slot as u8;
+            }
+        }
+        Layout { idx, slot_of }
+    }
+
+    /// True if the line holds nothing but white space (such lines are skipped, as pandas does).
+    pub fn is_blank(line: &[u8]) -> bool {
+        match std::str::from_utf8(line) {
+            Ok(text) => text.trim().is_empty(),
+            Err(_) => false,
+        }
+    }
+
+    /// Parses one line (without its `\n`) into ts_local, t, force, velocity, acceleration,
+    /// position (NaN where empty or absent); `None` for a blank line.
+    pub fn parse_line(&self, line: &[u8]) -> Result<Option<[f64; 6]>, RowError> {
+        let line = match line {
+            [.., b'\r'] => {
+                let mut l = line;
+                while let [rest @ .., b'\r' | b'\n'] = l {
+                    l = rest;
+                }
+                l
+            }
+            _ => line,
+        };
+        if line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line) {
+            return Ok(None);
+        }
+        let mut values = [f64::NAN; 6];
+        let mut found = 0usize;
+        let mut rest = line;
+        for (field_index, &slot) in self.slot_of.iter().enumerate() {
+            found = field_index + 1;
+            // The common case: a plain number right up to the tab (or the line's end), parsed
+            // without looking for the tab first.
+            if slot != NONE {
+                if let Ok((v, used)) = fast_float2::parse_partial::<f64, _>(rest) {
+                    match rest.get(used) {
+                        None => {
+                            values[slot as usize] = v;
+                            break;
+                        }
+                        Some(b'\t') => {
+                            values[slot as usize] = v;
+                            rest = &rest[used + 1..];
+                            continue;
+                        }
+                        Some(_) => {}
+                    }
+                }
+            }
+            let (field, next) = match memchr::memchr(b'\t', rest) {
+                Some(i) => (&rest[..i], Some(&rest[i + 1..])),
+                None => (rest, None),
+            };
+            if slot != NONE {
+                let slot = slot as usize;
+                values[slot] = parse_field_bytes(field).ok_or_else(|| RowError::NotANumber {
+                    slot,
+                    text: String::from_utf8_lossy(field).chars().take(40).collect(),
+                })?;
+            }
+            match next {
+                Some(n) => rest = n,
+                None => break,
+            }
+        }
+        for slot in 1..5 {
+            let needed = self.idx[slot].unwrap_or(0) + 1;
+            if needed > found {
+                return Err(RowError::ShortRow {
+                    slot,
+                    found,
+                    needed,
+                });
+            }
+        }
+        Ok(Some(values))
+    }
+}
+
+/// A row from the six values of [`Layout::parse_line`].
+pub fn row_of(v: &[f64; 6]) -> Row {
+    Row {
+        ts_local: v[0],
+        sample: Sample {
+            t: v[1],
+            force: v[2],
+            velocity: v[3],
+            acceleration: v[4],
+            position: v[5],
+        },
+    }
+}
+
 /// Streams rows from a TSV in constant memory.
 pub struct TsvReader<R> {
     input: R,
     source_name: String,
     line_no: u64,
-    line: String,
-    /// Field indices of ts_local, t, force, velocity, acceleration, position.
-    idx: [Option<usize>; 6],
+    line: Vec<u8>,
+    layout: Layout,
     bytes_read: u64,
 }
 
@@ -157,15 +353,20 @@ impl<R: BufRead> TsvReader<R> {
             input,
             source_name,
             line_no: 1,
-            line: String::new(),
-            idx,
+            line: Vec::new(),
+            layout: Layout::new(idx),
             bytes_read: n as u64,
         })
     }
 
     /// True if the file has a `position` column.
     pub fn has_position(&self) -> bool {
-        self.idx[5].is_some()
+        self.layout.idx[5].is_some()
+    }
+
+    /// The column layout (to parse further lines of the same file elsewhere).
+    pub fn layout(&self) -> &Layout {
+        &self.layout
     }
 
     /// Bytes consumed so far (for progress reporting).
@@ -189,7 +390,7 @@ impl<R: BufRead> TsvReader<R> {
             self.line.clear();
             let n = self
                 .input
-                .read_line(&mut self.line)
+                .read_until(b'\n', &mut self.line)
                 .map_err(|e| TsvError::Io {
                     source_name: self.source_name.clone(),
                     line: self.line_no + 1,
@@ -200,51 +401,18 @@ impl<R: BufRead> TsvReader<R> {
             }
             self.bytes_read += n as u64;
             self.line_no += 1;
-            let text = self.line.trim_end_matches(['\r', '\n']);
-            if text.trim().is_empty() {
-                continue;
+            let line = self.line.strip_suffix(b"\n").unwrap_or(&self.line);
+            match self.layout.parse_line(line) {
+                Ok(None) => continue,
+                Ok(Some(v)) => return Ok(Some(row_of(&v))),
+                Err(e) => return Err(e.at(&self.source_name, self.line_no)),
             }
-            let mut values = [f64::NAN; 6];
-            let mut found = 0usize;
-            for (field_index, field) in text.split('\t').enumerate() {
-                found = field_index + 1;
-                if let Some(slot) = self.idx.iter().position(|i| *i == Some(field_index)) {
-                    values[slot] = parse_field(field).ok_or_else(|| TsvError::NotANumber {
-                        source_name: self.source_name.clone(),
-                        line: self.line_no,
-                        column: HEADER[slot].to_string(),
-                        text: field.chars().take(40).collect(),
-                    })?;
-                }
-            }
-            for (slot, name) in HEADER.iter().enumerate().take(5).skip(1) {
-                let needed = self.idx[slot].unwrap_or(0) + 1;
-                if needed > found {
-                    return Err(TsvError::ShortRow {
-                        source_name: self.source_name.clone(),
-                        line: self.line_no,
-                        column: (*name).to_string(),
-                        found,
-                        needed,
-                    });
-                }
-            }
-            return Ok(Some(Row {
-                ts_local: values[0],
-                sample: Sample {
-                    t: values[1],
-                    force: values[2],
-                    velocity: values[3],
-                    acceleration: values[4],
-                    position: values[5],
-                },
-            }));
         }
     }
 }
 
 /// Parses one field: a float, `nan`/`inf` in any case, or empty (NaN).
-fn parse_field(field: &str) -> Option<f64> {
+pub fn parse_field(field: &str) -> Option<f64> {
     let s = field.trim();
     if s.is_empty() {
         return Some(f64::NAN);
@@ -336,6 +504,107 @@ impl<W: Write> TsvWriter<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The byte-level parser accepts exactly what std's accepts, with the same values.
+    #[test]
+    fn fast_fields_agree_with_std() {
+        let cases = [
+            "0",
+            "-0",
+            "+1",
+            "1.",
+            ".5",
+            "-.5",
+            "1e5",
+            "1E-5",
+            "1.e3",
+            "1e+3",
+            "1e",
+            "e5",
+            ".",
+            "-",
+            "+",
+            "1.2.3",
+            "0x10",
+            "1_000",
+            "inf",
+            "-inf",
+            "+inf",
+            "Infinity",
+            "-INFINITY",
+            "infin",
+            "nan",
+            "NaN",
+            "-nan",
+            "+nan",
+            "1e400",
+            "-1e400",
+            "1e-400",
+            "4.9e-324",
+            "2.5e-324",
+            "0.30000000000000004",
+            "123456789012345678901234567890",
+            " 7 ",
+            "\u{a0}8",
+            "9\u{a0}",
+            "1,5",
+            "1 2",
+            "--1",
+            "+-1",
+            "1e5e5",
+            "0.000000000e0",
+            "2.827626e2",
+            "١",
+            "",
+            "   ",
+            "\r",
+            "1d3",
+            "1f",
+            "0e0",
+            "00012",
+            "1e0001",
+        ];
+        for c in cases {
+            let want = parse_field(c);
+            let got = parse_field_bytes(c.as_bytes());
+            match (want, got) {
+                (Some(a), Some(b)) => {
+                    assert!(
+                        a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                        "`{c}`"
+                    )
+                }
+                (None, None) => {}
+                _ => panic!("`{c}`: std {want:?}, fast {got:?}"),
+            }
+            // The same through a whole line (the parser's shortcut before the tab).
+            let line = format!("t\tforce\tvelocity\tacceleration\n{c}\t2\t{c}\t{c}");
+            let mut r = TsvReader::new(line.as_bytes(), "mem").unwrap();
+            match (want, r.next_row()) {
+                (Some(a), Ok(Some(row))) => {
+                    for b in [row.sample.t, row.sample.velocity, row.sample.acceleration] {
+                        assert!(
+                            a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan()),
+                            "`{c}`"
+                        );
+                    }
+                }
+                (None, Err(TsvError::NotANumber { .. })) => {}
+                (Some(_), Ok(None)) if c.trim().is_empty() => {}
+                (w, g) => panic!("`{c}` in a line: std {w:?}, reader {g:?}"),
+            }
+        }
+    }
+
+    #[test]
+    fn lines_with_crlf_blank_and_unicode_space() {
+        let text = "t\tforce\tvelocity\tacceleration\r\n1\t2\t3\t4\r\n \t \r\n\u{a0}\n5\t6\t7\t8";
+        let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+        assert_eq!(r.next_row().unwrap().unwrap().sample.acceleration, 4.0);
+        assert_eq!(r.next_row().unwrap().unwrap().sample.t, 5.0);
+        assert_eq!(r.line_number(), 5);
+        assert!(r.next_row().unwrap().is_none());
+    }
 
     #[test]
     fn round_trip_and_errors() {

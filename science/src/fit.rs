@@ -2,10 +2,12 @@
 //!
 //! ## How data flows
 //! ```text
-//!  TSV file (or stdin, spooled to a temporary file)
-//!    pass 1: count rows, find the seed's window (last complete run of rows, minus its first 10 %)
-//!    pass 2: rows in the window ─► LoadEstimator::update (fixed memory) + a decimated copy for the plot
-//!    ─► LoadEstimator::estimate(bounds) ─► YAML/JSON on stdout, plot to a file
+//!  TSV file, memory-mapped (stdin: spooled to a temporary file first)
+//!    one pass, a chunk of whole lines per thread: each chunk keeps its last run of complete rows
+//!    as blocks of rows with their normal equations (LoadEstimator::update, fixed memory)
+//!    ─► the chunks' runs joined into the file's last run, the seed's 10 % cut made (the block it
+//!       falls in parsed again), the blocks merged (NormalEquations::merge)
+//!    ─► LoadEstimator::estimate(bounds) ─► YAML/JSON on stdout; a plot parses the window again
 //! ```
 //! The window reproduces the seed exactly: the seed keeps the rows from the start of the last
 //! run of rows whose every field is finite up to the last row where every column still has a
@@ -13,14 +15,17 @@
 //! file (pandas reads them all); propid checks the columns it uses (t, force, velocity,
 //! acceleration), which gives the same window on files whose other columns are complete.
 
+mod scan;
+
 use std::fs::File;
-use std::io::{BufRead, BufReader};
+use std::io::BufRead;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{Sample, TsvError, TsvReader};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -32,9 +37,10 @@ pub struct FitOptions {
     pub mass_min: f64,
     /// Largest (rotational) mass.
     pub mass_max: f64,
-    /// Largest viscous coefficient c1; 0 (the seed's default) forbids viscous friction.
+    /// Largest viscous coefficient c1; 0 (the seed's default) forbids viscous friction, infinity
+    /// leaves it unbounded.
     pub c1_max: f64,
-    /// Largest quadratic drag coefficient c2.
+    /// Largest quadratic drag coefficient c2 (infinity: unbounded).
     pub c2_max: f64,
     /// Propeller diameter [m], to report the torque coefficient C_Q.
     pub diameter: Option<f64>,
@@ -60,7 +66,7 @@ impl FitOptions {
     /// Checks the bounds and the propeller's geometry once, before any data is read.
     pub fn check(&self) -> Result<(), InputError> {
         let b = self;
-        if !(b.mass_min > 0.0 && b.mass_min <= b.mass_max && !b.mass_max.is_nan()) {
+        if !(b.mass_min > 0.0 && b.mass_min.is_finite() && b.mass_min <= b.mass_max) {
             return Err(InputError(format!(
                 "mass bounds must satisfy 0 < mass_min ≤ mass_max (got {} and {})",
                 b.mass_min, b.mass_max
@@ -139,6 +145,29 @@ pub struct Window {
     pub last: u64,
     /// Data rows in the file.
     pub rows: u64,
+    /// Rows with finite t, force, velocity and acceleration in the whole file.
+    pub complete: u64,
+    /// First row of the last run of complete rows (the seed keeps only that run).
+    pub run_start: u64,
+    /// The incomplete row that ended the previous run, if complete rows came before it:
+    /// (1-based line, column name).
+    pub breaker: Option<(u64, &'static str)>,
+}
+
+impl Window {
+    /// Complete rows the seed's trimming drops because an incomplete row came after them.
+    pub fn dropped_complete(&self) -> u64 {
+        self.complete - (self.last - self.run_start + 1)
+    }
+}
+
+/// The first of t, force, velocity, acceleration that is not finite.
+fn first_non_finite(s: &Sample) -> &'static str {
+    let names = ["t", "force", "velocity", "acceleration"];
+    let v = [s.t, s.force, s.velocity, s.acceleration];
+    (0..4)
+        .find(|i| !v[*i].is_finite())
+        .map_or("t", |i| names[i])
 }
 
 fn is_complete(s: &Sample) -> bool {
@@ -152,6 +181,9 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
     let mut last_valid = [None::<u64>; 4];
     let mut run_start = None::<u64>;
     let mut run_end = None::<u64>;
+    let mut complete = 0u64;
+    let mut last_incomplete = None::<(u64, &'static str)>;
+    let mut breaker = None;
     while let Some(row) = reader.next_row()? {
         let i = rows;
         rows += 1;
@@ -167,8 +199,12 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
         if is_complete(&s) {
             if run_end != Some(i.wrapping_sub(1)) || run_start.is_none() {
                 run_start = Some(i);
+                breaker = if complete > 0 { last_incomplete } else { None };
             }
             run_end = Some(i);
+            complete += 1;
+        } else {
+            last_incomplete = Some((reader.line_number(), first_non_finite(&s)));
         }
     }
     if rows == 0 {
@@ -189,54 +225,269 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
     // All rows after max_valid lack a value, so the last complete run ends at or before it.
     let last = end.min(max_valid);
     let first = start + (0.1 * (last - start) as f64) as u64;
-    Ok(Window { first, last, rows })
+    Ok(Window {
+        first,
+        last,
+        rows,
+        complete,
+        run_start: start,
+        breaker,
+    })
 }
 
 /// Fits a TSV file with the seed's trimming and bounds. Returns the report and a decimated copy
-/// of the fitted rows (for a plot). `progress` is called now and then with (bytes read, file size)
-/// during the second pass.
+/// of the fitted rows (for a plot). `progress` is called now and then with (bytes read, file size).
 pub fn fit_path(
     path: &Path,
     options: &FitOptions,
     progress: &mut dyn FnMut(u64, u64),
 ) -> Result<(FitReport, Vec<Sample>), FitError> {
+    fit_path_with(path, options, true, progress)
+}
+
+/// [`fit_path`], with the plot's rows only if `want_samples` (they cost a second parse of the
+/// fitted rows). `path` must be a regular file (it is memory-mapped).
+pub fn fit_path_with(
+    path: &Path,
+    options: &FitOptions,
+    want_samples: bool,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(FitReport, Vec<Sample>), FitError> {
     options.check()?;
     let name = path.display().to_string();
-    let open = || -> Result<TsvReader<BufReader<File>>, FitError> {
-        let f = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
-        Ok(TsvReader::new(
-            BufReader::with_capacity(1 << 16, f),
-            name.clone(),
-        )?)
+    let file = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+    let size = file.metadata().map(|m| m.len()).unwrap_or(0);
+    let map = if size == 0 {
+        None
+    } else {
+        // SAFETY: a read-only map of a file propid never writes. Another process shrinking
+        // the file while it is mapped would make a read fault (SIGBUS); that is the caveat
+        // every memory-mapping reader accepts, and the file is read once, start to end.
+        let map = unsafe { memmap2::Mmap::map(&file) }
+            .map_err(|e| InputError(format!("{name}: cannot map: {e}")))?;
+        let _ = map.advise(memmap2::Advice::Sequential);
+        Some(map)
     };
-    let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
-    let mut reader = open()?;
-    let window = find_window(&mut reader)?;
-    let mut reader = open()?;
-    let mut estimator = LoadEstimator::<f64>::new();
-    let keep_every = ((window.last - window.first + 1) / 4000).max(1);
-    let mut kept = Vec::new();
-    let mut i = 0u64;
-    while let Some(row) = reader.next_row()? {
-        if i >= window.first && i <= window.last {
-            let s = row.sample;
-            estimator.update(s.force, s.velocity, s.acceleration);
-            if (i - window.first) % keep_every == 0 {
-                kept.push(s);
+    let data: &[u8] = map.as_deref().unwrap_or(&[]);
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let chunks = if data.len() < 1 << 20 {
+        1
+    } else {
+        threads.min(data.len() / (512 << 10)).max(1)
+    };
+    fit_bytes(
+        data,
+        map.as_ref(),
+        &name,
+        options,
+        want_samples,
+        chunks,
+        progress,
+    )
+}
+
+/// Fits the TSV in `data` (named `name` in messages). `map` is the mapping `data` comes from, if
+/// any: pages already scanned are released from it.
+fn fit_bytes(
+    data: &[u8],
+    map: Option<&memmap2::Mmap>,
+    name: &str,
+    options: &FitOptions,
+    want_samples: bool,
+    chunks: usize,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(FitReport, Vec<Sample>), FitError> {
+    let reader = TsvReader::new(data, name)?;
+    let layout = reader.layout().clone();
+    let header_len = reader.bytes_read() as usize;
+    let size = data.len() as u64;
+    let pieces = scan::split(data, header_len, chunks);
+    let done = AtomicU64::new(header_len as u64);
+    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = match pieces.split_first() {
+        None => Vec::new(),
+        Some((&(a, b), rest)) => std::thread::scope(|s| {
+            let handles: Vec<_> = rest
+                .iter()
+                .map(|&(a, b)| {
+                    let (layout, done) = (&layout, &done);
+                    s.spawn(move || scan::scan(data, a, b, layout, map, done, || {}))
+                })
+                .collect();
+            // This thread scans the first chunk and reports the progress of all.
+            let first = scan::scan(data, a, b, &layout, map, &done, || {
+                progress(done.load(Ordering::Relaxed), size)
+            });
+            let mut out = vec![first];
+            for h in handles {
+                out.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
             }
-        }
-        i += 1;
-        if i > window.last {
+            out
+        }),
+    };
+    progress(size, size);
+    // Chunk k's lines start after line_base[k]; its rows after row_base[k].
+    let mut chunks = Vec::with_capacity(results.len());
+    let (mut line_base, mut row_base) = (vec![], vec![]);
+    let (mut lines, mut rows, mut complete) = (1u64, 0u64, 0u64);
+    for r in results {
+        let c = r.map_err(|(line, e)| e.at(name, lines + line))?;
+        line_base.push(lines);
+        row_base.push(rows);
+        lines += c.lines;
+        rows += c.rows;
+        complete += c.complete;
+        chunks.push(c);
+    }
+    if rows == 0 {
+        return Err(InputError(format!("{name}: no data rows after the header")).into());
+    }
+    let Some(last_chunk) = chunks.iter().rposition(|c| c.run_rows > 0) else {
+        return Err(InputError(format!(
+            "{name}: no row has finite t, force, velocity and acceleration"
+        ))
+        .into());
+    };
+    // The file's last run: the last chunk's, joined with the runs of the chunks before it as
+    // long as they reach across the boundary.
+    let mut parts = vec![last_chunk];
+    let mut breaker = None;
+    let mut k = last_chunk;
+    while chunks[k].run_open_at_start {
+        let Some(j) = (0..k).rev().find(|j| chunks[*j].rows > 0) else {
+            break;
+        };
+        if chunks[j].last_row_complete {
+            parts.push(j);
+            k = j;
+        } else {
+            breaker = chunks[j]
+                .last_incomplete
+                .map(|(l, c)| (line_base[j] + l, c));
             break;
         }
-        if i % 65536 == 0 {
-            progress(reader.bytes_read(), size);
+    }
+    if !chunks[k].run_open_at_start {
+        breaker = chunks[k].breaker.map(|(l, c)| (line_base[k] + l, c));
+    }
+    parts.reverse();
+    let run_start = row_base[parts[0]] + chunks[parts[0]].run_first_row;
+    let run_rows: u64 = parts.iter().map(|k| chunks[*k].run_rows).sum();
+    let last = run_start + run_rows - 1;
+    let first = run_start + (0.1 * (last - run_start) as f64) as u64;
+    let window = Window {
+        first,
+        last,
+        rows,
+        complete,
+        run_start,
+        breaker: if complete > run_rows { breaker } else { None },
+    };
+    // The sums of rows first..=last: the block the cut falls in is parsed again.
+    let mut skip = first - run_start;
+    let mut total: Option<LoadEstimator<f64>> = None;
+    let mut start = (0usize, 0u64, 0u64); // (offset, line, rows to skip there)
+    for k in &parts {
+        for b in &chunks[*k].run {
+            let line = line_base[*k] + b.line;
+            if let Some(t) = &mut total {
+                t.merge(&b.sums);
+            } else if skip >= b.rows {
+                skip -= b.rows;
+            } else if skip == 0 {
+                total = Some(b.sums);
+                start = (b.offset, line, 0);
+            } else {
+                let mut est = LoadEstimator::new();
+                let mut i = 0u64;
+                walk(data, b.offset, b.rows, &layout, |_, v| {
+                    if i >= skip {
+                        est.update(v[2], v[3], v[4]);
+                    }
+                    i += 1;
+                });
+                total = Some(est);
+                start = (b.offset, line, skip);
+            }
         }
     }
-    progress(size, size);
-    let report = report_of(&estimator, options, window, &name)?;
+    let estimator = total.unwrap_or_default();
+    let n = last - first + 1;
+    // Rows of the window, in order, with their line numbers.
+    let window_rows = |f: &mut dyn FnMut(u64, &[f64; 6])| {
+        let (offset, line, skip) = start;
+        let mut i = 0u64;
+        walk(data, offset, skip + n, &layout, |l, v| {
+            if i >= skip {
+                f(line + l - 1, v);
+            }
+            i += 1;
+        });
+    };
+    if !sums_finite(&estimator) {
+        let mut est = LoadEstimator::new();
+        let mut overflow = None;
+        window_rows(&mut |line, v| {
+            est.update(v[2], v[3], v[4]);
+            if overflow.is_none() && !sums_finite(&est) {
+                overflow = Some((line, row_of(v).sample));
+            }
+        });
+        if let Some((line, s)) = overflow {
+            return Err(overflow_error(name, line, &s).into());
+        }
+    }
+    let report = report_of(&estimator, options, window, name)?;
+    let mut kept = Vec::new();
+    if want_samples {
+        let keep_every = (n / 4000).max(1);
+        let mut i = 0u64;
+        window_rows(&mut |_, v| {
+            if i % keep_every == 0 {
+                kept.push(row_of(v).sample);
+            }
+            i += 1;
+        });
+    }
     Ok((report, kept))
 }
+
+/// Calls `f(local line, values)` for the next `rows` rows from `offset` (blank lines skipped;
+/// the rows were parsed once already, so none fails).
+fn walk(data: &[u8], offset: usize, rows: u64, layout: &Layout, mut f: impl FnMut(u64, &[f64; 6])) {
+    let mut left = rows;
+    if left == 0 {
+        return;
+    }
+    scan::lines(data, offset, data.len(), |line, bytes, _| {
+        if let Ok(Some(v)) = layout.parse_line(bytes) {
+            f(line, &v);
+            left -= 1;
+        }
+        left > 0
+    });
+}
+
+/// True if every sum of the normal equations is finite.
+fn sums_finite(estimator: &LoadEstimator<f64>) -> bool {
+    let e = estimator.equations();
+    e.matrix().iter().flatten().all(|v| v.is_finite())
+        && e.vector().iter().all(|v| v.is_finite())
+        && e.sum_y_squared().is_finite()
+}
+
+/// The error for the row at which the sums stop being finite.
+fn overflow_error(name: &str, line: u64, s: &Sample) -> InputError {
+    InputError(format!(
+        "{name}: line {line}: the sums of squares overflow a 64-bit float at this row \
+         (force {:e}, velocity {:e}, acceleration {:e}): a value this large is not a measurement; \
+         remove the row or rescale the data",
+        s.force, s.velocity, s.acceleration
+    ))
+}
+
+/// Condition numbers above this mean the regressors are linearly dependent to within rounding:
+/// any printed estimate would be an artefact of the arithmetic.
+const UNIDENTIFIABLE_CONDITION: f64 = 1e15;
 
 fn report_of(
     estimator: &LoadEstimator<f64>,
@@ -253,11 +504,15 @@ fn report_of(
             window.rows
         )));
     }
+    // An infinite c1_max or c2_max means "unbounded": the bound rows are `c·θ₀ ≤ θ` and an
+    // infinite coefficient makes them NaN, so a finite stand-in far beyond any physical drag is
+    // used (θ₀ = 1/J ≤ 1/mass_min keeps every product finite).
+    let unbounded = |c: f64| if c.is_infinite() { 1e150 } else { c };
     let bounds = LoadBounds {
         mass_min: args.mass_min,
         mass_max: args.mass_max,
-        c1_max: args.c1_max,
-        c2_max: args.c2_max,
+        c1_max: unbounded(args.c1_max),
+        c2_max: unbounded(args.c2_max),
     };
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
@@ -272,7 +527,24 @@ fn report_of(
         )),
         SolveError::Infeasible => InputError(format!("{name}: the bounds admit no solution")),
     })?;
+    if est.condition_number.is_nan() || est.condition_number >= UNIDENTIFIABLE_CONDITION {
+        return Err(InputError(format!(
+            "{name}: cannot judge: the data cannot identify the mass, c1 and c2 (condition number \
+             {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}..={} \
+             (e.g. a constant velocity); record with a torque that varies the speed",
+            est.condition_number,
+            window.first + 1,
+            window.last + 1
+        )));
+    }
     let mut warnings = Vec::new();
+    if let Some((line, column)) = window.breaker {
+        warnings.push(format!(
+            "{} complete rows dropped by the seed's trimming: line {line} has a non-finite \
+             `{column}`, and the seed fits only the last run of complete rows (after it)",
+            window.dropped_complete()
+        ));
+    }
     if est.condition_number > 1e8 {
         let rel = [
             est.mass_stderr / est.mass.abs(),
@@ -314,24 +586,49 @@ fn report_of(
     })
 }
 
-/// The report as the seed's YAML (same keys and unit comments), plus propid's extras.
+/// A float as YAML 1.1 reads it as a float (PyYAML's resolver): a mantissa with a point and a
+/// signed exponent of at least two digits (`2.827626e+02`, never `2.827626e2`, which YAML 1.1
+/// loads as a string), and `.inf`, `-.inf`, `.nan`.
+pub fn yaml_float(v: f64, digits: usize) -> String {
+    if v.is_nan() {
+        return ".nan".into();
+    }
+    if v.is_infinite() {
+        return if v > 0.0 { ".inf" } else { "-.inf" }.into();
+    }
+    let v = v + 0.0; // no "-0"
+    let text = format!("{v:.digits$e}");
+    let (mantissa, exponent) = text.split_once('e').unwrap_or((&text, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    let mantissa = if mantissa.contains('.') {
+        mantissa.to_string()
+    } else {
+        format!("{mantissa}.0")
+    };
+    let sign = if exponent < 0 { '-' } else { '+' };
+    format!("{mantissa}e{sign}{:02}", exponent.unsigned_abs())
+}
+
+/// The report as the seed's YAML (same keys and unit comments), plus propid's extras. Every
+/// number loads as a float in YAML 1.1 readers (PyYAML) and YAML 1.2 readers alike.
 pub fn to_yaml(r: &FitReport) -> String {
+    let f = yaml_float;
     let mut s = String::new();
-    s += &format!("mass: {:.9e} # [kg] | [kg*m^2]\n", r.mass + 0.0);
-    s += &format!("c1:   {:.9e} # [N*s/m] | [N*m*s/rad]\n", r.c1 + 0.0);
-    s += &format!("c2:   {:.9e} # [N*s^2/m^2] | [N*m*s^2/rad^2]\n", r.c2);
-    s += &format!("mass_stderr: {:.3e}\n", r.mass_stderr);
-    s += &format!("c1_stderr: {:.3e}\n", r.c1_stderr);
-    s += &format!("c2_stderr: {:.3e}\n", r.c2_stderr);
+    s += &format!("mass: {} # [kg] | [kg*m^2]\n", f(r.mass, 9));
+    s += &format!("c1:   {} # [N*s/m] | [N*m*s/rad]\n", f(r.c1, 9));
+    s += &format!("c2:   {} # [N*s^2/m^2] | [N*m*s^2/rad^2]\n", f(r.c2, 9));
+    s += &format!("mass_stderr: {}\n", f(r.mass_stderr, 3));
+    s += &format!("c1_stderr: {}\n", f(r.c1_stderr, 3));
+    s += &format!("c2_stderr: {}\n", f(r.c2_stderr, 3));
     s += &format!(
-        "rms: {:.6e} # acceleration residual [m/s^2] | [rad/s^2]\n",
-        r.rms
+        "rms: {} # acceleration residual [m/s^2] | [rad/s^2]\n",
+        f(r.rms, 6)
     );
     s += &format!("samples: {}\n", r.samples);
-    s += &format!("condition_number: {:.3e}\n", r.condition_number);
+    s += &format!("condition_number: {}\n", f(r.condition_number, 3));
     s += &format!("at_bound: [{}]\n", r.at_bound.join(", "));
     if let Some(cq) = r.c_q {
-        s += &format!("c_q: {cq:.6e} # propeller torque coefficient\n");
+        s += &format!("c_q: {} # propeller torque coefficient\n", f(cq, 6));
     }
     s
 }
@@ -379,5 +676,166 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
                 }],
             },
         ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two-pass streaming reference (the seed's window found first, then summed in order).
+    fn reference(text: &str) -> Result<(Window, LoadEstimator<f64>), String> {
+        let mut r = TsvReader::new(text.as_bytes(), "mem").map_err(|e| e.to_string())?;
+        let w = find_window(&mut r).map_err(|e| e.to_string())?;
+        let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+        let mut est = LoadEstimator::new();
+        let mut i = 0;
+        while let Some(row) = r.next_row().unwrap() {
+            if i >= w.first && i <= w.last {
+                est.update(
+                    row.sample.force,
+                    row.sample.velocity,
+                    row.sample.acceleration,
+                );
+            }
+            i += 1;
+        }
+        Ok((w, est))
+    }
+
+    /// The one-pass chunked scan gives the two-pass answer whatever the chunks, with incomplete
+    /// rows and blank lines anywhere (head, middle, chunk borders, tail).
+    #[test]
+    fn chunked_scan_matches_the_two_pass_reference() {
+        let holes: [&[usize]; 7] = [
+            &[],
+            &[0, 1, 2],
+            &[700],
+            &[100, 3000, 3001, 5900],
+            &[5999],
+            &[2000, 2001, 2002, 2003, 4000],
+            &[5, 6, 5997, 5998, 5999],
+        ];
+        let options = FitOptions {
+            c1_max: f64::INFINITY,
+            ..FitOptions::default()
+        };
+        for (h, hole) in holes.iter().enumerate() {
+            let mut text = String::from("t\tforce\tvelocity\tacceleration\n");
+            let mut w = 3.0f64;
+            for i in 0..6000usize {
+                let q = 1.0 + (i as f64 * 0.01).sin();
+                let a = (q - 0.1 * w - 0.02 * w * w.abs()) / 0.5 + (i as f64 * 7.7).sin() * 0.01;
+                if hole.contains(&i) {
+                    text += &format!("{i}\t{q}\tnan\t{a}\n");
+                } else {
+                    text += &format!("{i}\t{q}\t{w}\t{a}\n");
+                }
+                if i % 977 == 0 {
+                    text += "\n \t\n";
+                }
+                w += a * 0.005;
+            }
+            let (want_window, want) = reference(&text).unwrap();
+            for chunks in [1, 2, 3, 5, 8, 64] {
+                let (report, samples) = fit_bytes(
+                    text.as_bytes(),
+                    None,
+                    "mem",
+                    &options,
+                    true,
+                    chunks,
+                    &mut |_, _| {},
+                )
+                .unwrap();
+                let got = report_of(&want, &options, want_window, "mem").unwrap();
+                assert_eq!(report.samples, want_window.last - want_window.first + 1);
+                assert_eq!(report.rows, 6000);
+                assert_eq!(report.warnings, got.warnings, "holes {h}, {chunks} chunks");
+                // Sums equal to rounding (compensated in both, added in another order); the
+                // solve amplifies that by at most the condition number.
+                let tol = got.condition_number * 1e-15;
+                for (a, b) in [
+                    (report.mass, got.mass),
+                    (report.c1, got.c1),
+                    (report.c2, got.c2),
+                ] {
+                    assert!(
+                        (a - b).abs() <= tol * b.abs(),
+                        "holes {h}, {chunks} chunks: {a} vs {b} (condition number {})",
+                        got.condition_number
+                    );
+                }
+                assert!(!samples.is_empty());
+            }
+        }
+    }
+
+    /// YAML 1.1's float pattern (the one PyYAML resolves), by hand:
+    /// `[-+]?([0-9][0-9_]*)?\.[0-9.]*([eE][-+][0-9]+)?`, or `[-+]?\.(inf|Inf|INF)`, `\.(nan|NaN|NAN)`.
+    fn yaml11_float(s: &str) -> bool {
+        if matches!(s, ".nan" | ".NaN" | ".NAN") {
+            return true;
+        }
+        let s = s.strip_prefix(['-', '+']).unwrap_or(s);
+        if matches!(s, ".inf" | ".Inf" | ".INF") {
+            return true;
+        }
+        let (mantissa, exponent) = match s.find(['e', 'E']) {
+            Some(i) => (&s[..i], Some(&s[i + 1..])),
+            None => (s, None),
+        };
+        let Some(dot) = mantissa.find('.') else {
+            return false;
+        };
+        let (int, frac) = (&mantissa[..dot], &mantissa[dot + 1..]);
+        let int_ok = int.is_empty()
+            || (int.as_bytes()[0].is_ascii_digit()
+                && int.bytes().all(|b| b.is_ascii_digit() || b == b'_'));
+        let frac_ok = frac.bytes().all(|b| b.is_ascii_digit() || b == b'.');
+        let exp_ok = exponent.is_none_or(|e| {
+            let digits = e.strip_prefix(['-', '+']);
+            digits.is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        });
+        int_ok && frac_ok && exp_ok
+    }
+
+    #[test]
+    fn yaml_floats_match_the_yaml_1_1_float_pattern_and_round_trip() {
+        assert!(
+            !yaml11_float("2.827626e2"),
+            "the old output is a string in YAML 1.1"
+        );
+        assert!(!yaml11_float("0.000000000e0"));
+        assert!(yaml11_float("2.827626e+02"));
+        for v in [
+            0.0,
+            -0.0,
+            282.7626,
+            -1e-9,
+            1.5e-8,
+            1e300,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            7.0,
+        ] {
+            for digits in [0, 3, 6, 9] {
+                let text = yaml_float(v, digits);
+                assert!(yaml11_float(&text), "{v} → `{text}`");
+                if v.is_finite() {
+                    let back: f64 = text.parse().unwrap();
+                    let want: f64 = format!("{v:.digits$e}").parse().unwrap();
+                    assert_eq!(back, want, "{v} → `{text}`");
+                }
+            }
+        }
+        assert_eq!(yaml_float(282.7626, 6), "2.827626e+02");
+        assert_eq!(yaml_float(0.0, 9), "0.000000000e+00");
+        assert_eq!(yaml_float(-0.0, 3), "0.000e+00");
+        assert_eq!(yaml_float(2e-5, 3), "2.000e-05");
+        assert_eq!(yaml_float(1e300, 3), "1.000e+300");
     }
 }

@@ -4,7 +4,7 @@ use std::io::{Read, Seek, Write};
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
+use propid_science::fit::{figure, fit_path_with, to_yaml, FitError, FitOptions};
 
 use crate::InputError;
 
@@ -24,23 +24,23 @@ pub struct Args {
     /// reads standard input.
     pub file: Option<PathBuf>,
     /// Smallest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e-9)]
+    #[arg(long, default_value_t = 1e-9, allow_negative_numbers = true)]
     pub mass_min: f64,
     /// Largest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e3)]
+    #[arg(long, default_value_t = 1e3, allow_negative_numbers = true)]
     pub mass_max: f64,
     /// Largest viscous coefficient c1 [N·s/m] or [N·m·s/rad]; 0 (the seed's default) forbids
     /// viscous friction.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
     pub c1_max: f64,
     /// Largest quadratic drag coefficient c2 [N·s²/m²] or [N·m·s²/rad²].
-    #[arg(long, default_value_t = 1e2)]
+    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true)]
     pub c2_max: f64,
     /// Propeller diameter [m]: also report the torque coefficient C_Q = 4π²·c2/(ρ·D⁵).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub diameter: Option<f64>,
     /// Air density [kg/m³] for C_Q.
-    #[arg(long, default_value_t = 1.225)]
+    #[arg(long, default_value_t = 1.225, allow_negative_numbers = true)]
     pub density: f64,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Yaml)]
@@ -82,15 +82,30 @@ fn progress_bar() -> indicatif::ProgressBar {
 
 /// Runs `propid fit`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    // Flags first: a bad bound or geometry is reported before any input is read.
+    let options = args.options();
+    options.check()?;
     let from_stdin = args.file.as_deref().is_none_or(|p| p == Path::new("-"));
-    // Standard input is spooled to a temporary file: two passes in constant memory.
+    // A pipe given by name (`<(…)`, a FIFO) cannot be mapped: it is spooled like stdin.
+    let pipe = args
+        .file
+        .as_deref()
+        .filter(|p| *p != Path::new("-"))
+        .filter(|p| std::fs::metadata(p).is_ok_and(|m| !m.is_file()));
+    // Standard input is spooled to a temporary file, which is then mapped like any file.
     let spool;
-    let path: &Path = if from_stdin {
+    let path: &Path = if from_stdin || pipe.is_some() {
         let mut tmp = tempfile::NamedTempFile::new().context("cannot create a temporary file")?;
-        let mut stdin = std::io::stdin().lock();
+        let mut stdin: Box<dyn Read> = match pipe {
+            Some(p) => Box::new(
+                std::fs::File::open(p)
+                    .map_err(|e| InputError(format!("{}: cannot open: {e}", p.display())))?,
+            ),
+            None => Box::new(std::io::stdin().lock()),
+        };
         let mut buf = vec![0u8; 1 << 16];
         loop {
-            let n = stdin.read(&mut buf).context("reading standard input")?;
+            let n = stdin.read(&mut buf).context("reading the input")?;
             if n == 0 {
                 break;
             }
@@ -104,7 +119,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     } else {
         args.file.as_deref().unwrap_or(Path::new("-"))
     };
-    let options = args.options();
     let bar = (args.progress || size_of(path) > 50 << 20).then(progress_bar);
     let mut on_progress = |done: u64, total: u64| {
         if let Some(bar) = &bar {
@@ -112,14 +126,20 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             bar.set_position(done);
         }
     };
-    let result = fit_path(path, &options, &mut on_progress);
+    let result = fit_path_with(path, &options, args.plot.is_some(), &mut on_progress);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let (report, samples) = result.map_err(anyhow::Error::from).map_err(|e| {
-        if from_stdin {
-            // Name standard input, not the spool file, in messages.
-            let message = format!("{e:#}").replace(&path.display().to_string(), "<stdin>");
+    // Bad input becomes an InputError or TsvError (exit status 2), not a FitError wrapping one.
+    let result = result.map_err(|e| match e {
+        FitError::Input(e) => anyhow::Error::from(e),
+        FitError::Tsv(e) => anyhow::Error::from(e),
+    });
+    let (report, samples) = result.map_err(|e| {
+        if from_stdin || pipe.is_some() {
+            // Name standard input (or the pipe), not the spool file, in messages.
+            let shown = pipe.map_or("<stdin>".into(), |p| p.display().to_string());
+            let message = format!("{e:#}").replace(&path.display().to_string(), &shown);
             if crate::exit_status_for(&e) == 2 {
                 InputError(message).into()
             } else {
