@@ -3,13 +3,14 @@
 //! Four delimited members, each preceded by a 4-byte delimiter header (its body length):
 //! publishers and subscribers ([`SubjectIdList`], a union: a 8192-bit mask of 1024 bytes, a
 //! sparse list of at most 255 subject-IDs, or "all"), clients and servers ([`ServiceIdList`], a
-//! 512-bit mask of 64 bytes). The message is sealed; its largest form (two masks) is 2194 bytes,
+//! 512-bit mask of 64 bytes). The message is sealed; its largest form today (two masks) is 2194
+//! bytes, and because its members are delimited a receiver must accept up to 8466 (the extent),
 //! while a node with a few subjects sends the sparse form: 146 bytes plus 2 per subject-ID
 //! (22 Classic CAN frames for a handful of ports).
 //!
 //! Decoding follows the DSDL rules for delimited types: a body shorter than its type reads as
-//! zero-extended, a longer one is truncated, and a header that claims more bytes than remain is
-//! rejected ([`DecodeError::DelimiterHeaderOverPayload`]).
+//! zero-extended, a longer one is truncated, and a header that claims more bytes than remain (or
+//! that is itself cut short) is rejected ([`DecodeError::DelimiterHeaderOverPayload`]).
 
 use super::register::read_length;
 use super::{BitReader, BitWriter, DataType, DecodeError};
@@ -156,9 +157,13 @@ fn read_delimited<T>(
 ) -> Result<T, DecodeError> {
     let length = r.read_uint(32) as usize;
     let start = r.bit_position() / 8;
-    let remaining = payload.len().saturating_sub(start);
-    if length > remaining {
-        return Err(DecodeError::DelimiterHeaderOverPayload { length, remaining });
+    // A header that itself runs past the end leaves a negative remainder: even a zero length is
+    // then refused (PyCyphal's rule: `header * 8 > remaining_bit_length`, which can be negative).
+    if start > payload.len() || length > payload.len() - start {
+        return Err(DecodeError::DelimiterHeaderOverPayload {
+            length,
+            remaining: payload.len().saturating_sub(start),
+        });
     }
     let body = if length == 0 {
         &[][..]
@@ -191,7 +196,8 @@ impl PortList {
 }
 
 impl DataType for PortList {
-    const EXTENT_BYTES: usize = 2194;
+    /// The delimited members may grow to their extents in later minor versions: 8466 bytes.
+    const EXTENT_BYTES: usize = 8466;
     const MAX_SIZE_BYTES: usize = 2194;
 
     fn serialize(&self, out: &mut [u8]) -> usize {
