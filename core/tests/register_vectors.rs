@@ -96,6 +96,7 @@ fn service_list_of(j: &Json) -> ServiceIdList {
 
 /// A decoded value of any of the types, compared through its serialization.
 #[derive(Debug)]
+#[allow(clippy::large_enum_variant)] // test-only value holder
 enum Decoded {
     Value(Value),
     Name(Name),
