@@ -276,7 +276,7 @@ fn to_int(e: Elem, min: i128, max: i128) -> Option<i128> {
         Elem::Bool(_) => return None,
         Elem::Int(x) => x,
         Elem::Float(x) => {
-            let r = x.round_ties_even();
+            let r = libm::rint(x); // half to even, as Python's round()
             if !r.is_finite() || r.abs() > 1e30 {
                 return None;
             }
