@@ -11,7 +11,7 @@ use propid_core::dsdl::{
     ListRequest, ListResponse, Name, PortList, Value, ACCESS_SERVICE_ID,
     EXECUTE_COMMAND_SERVICE_ID, LIST_SERVICE_ID,
 };
-use propid_core::node::{Event, Node, NodeConfig, Registry};
+use propid_core::node::{parse_value, Event, Node, NodeConfig, Registry};
 use propid_core::time::Instant;
 use serde_json::Value as Json;
 
@@ -70,6 +70,41 @@ fn writes_convert_as_pycyphal_register_server_does() {
     .unwrap();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
     assert_eq!(n, 560);
+}
+
+#[test]
+fn environment_text_reads_as_pycyphal_reads_it() {
+    let doc: Json =
+        serde_json::from_str(include_str!("data/register_payloads.json")).expect("vector file");
+    let mut failures = Vec::new();
+    let mut n = 0;
+    for case in doc["cases"].as_array().unwrap() {
+        if case["kind"] != "env" {
+            continue;
+        }
+        n += 1;
+        let template = value_of(&case["register"]);
+        let got = parse_value(&template, case["text"].as_str().unwrap());
+        let ok = match (&case["result"], &got) {
+            (Json::Null, None) => true,
+            (Json::Null, Some(_)) | (_, None) => false,
+            (want, Some(got)) => same_value(got, &value_of(want)),
+        };
+        if !ok {
+            failures.push(format!("{}: got {got:?}", case["name"].as_str().unwrap()));
+        }
+    }
+    std::io::Write::write_all(
+        &mut std::io::stderr(),
+        format!(
+            "register text: {} of {n} env cases as PyCyphal\n",
+            n - failures.len()
+        )
+        .as_bytes(),
+    )
+    .unwrap();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert_eq!(n, 272);
 }
 
 type Client = Node<6, 8, 512, 64>;

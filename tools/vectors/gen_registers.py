@@ -9,7 +9,9 @@ Writes core/tests/data/register_payloads.json, checked both ways by core/tests/r
     capacity, union tags past the last member and delimiter headers past the end;
   - "assign" cases: a register of one type, a write of another, and what PyCyphal's register server
     (pycyphal.application._register_server, ValueProxy.assign + Registry) leaves in the register, or null when
-    PyCyphal's conversion raises (then its server sends no response; propid answers with the unchanged value).
+    PyCyphal's conversion raises (then its server sends no response; propid answers with the unchanged value);
+  - "env" cases: a register and the text of an environment variable, and what PyCyphal's
+    ValueProxy.assign_environment_variable makes of it (null: PyCyphal raises, the value is refused).
 
 Types: uavcan.register.{Access,List}.1.0 (request and response), Name.1.0, Value.1.0 (every union member),
 uavcan.node.port.List.1.0 (SubjectIDList mask / sparse_list / total, ServiceIDList), uavcan.node.ExecuteCommand.1.3.
@@ -415,6 +417,26 @@ def build() -> dict[str, Any]:
                 if error:
                     case["pycyphal_exception"] = error
                 cases.append(case)
+
+    # ---------------- Register values from environment variables (ValueProxy.assign_environment_variable) -----------
+    texts = ["42", "  7   8  ", "2.5", "-1", "1e3", "0.005", "0.1 0.9", "1 2 3 4", "", "abc", "nan", "inf", "-0",
+             "300", "65535", "65536", "1.5 x"]
+    for rk, ritems in registers:
+        for text in texts:
+            proxy = VP(make_value(rk, ritems))
+            error = None
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    proxy.assign_environment_variable(text)
+            except Exception as ex:  # noqa: BLE001
+                error = type(ex).__name__
+            case = {"type": "env", "name": f"environment {text!r} into {rk} {ritems!r:.40}", "kind": "env",
+                    "register": value_json(make_value(rk, ritems)), "text": text,
+                    "result": None if error else value_json(proxy.value)}
+            if error:
+                case["pycyphal_exception"] = error
+            cases.append(case)
 
     return {"generator": generator_info(), "types": types, "cases": cases}
 

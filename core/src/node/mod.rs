@@ -23,7 +23,7 @@
 use core::time::Duration;
 
 mod registry;
-pub use registry::{convert, Command, Register, RegisterError, Registry};
+pub use registry::{convert, parse_value, Command, Register, RegisterError, Registry};
 
 use crate::can::{
     Frame, FrameSplitter, Mtu, Port, Priority, Reassembler, RxStats, Subscription, TransferHeader,

@@ -180,6 +180,15 @@ impl<const N: usize> Registry<N> {
         Ok(())
     }
 
+    /// Sets a register from text (an environment variable, a flag, a line of a register file),
+    /// as [`parse_value`] reads it.
+    pub fn set_text(&mut self, name: &str, text: &str) -> Result<(), RegisterError> {
+        let i = self.index_of(name).ok_or(RegisterError::NotFound)?;
+        let r = &mut self.registers[i];
+        r.value = parse_value(&r.value, text).ok_or(RegisterError::TypeMismatch)?;
+        Ok(())
+    }
+
     /// `uavcan.register.List`: the name at `index`, empty past the end.
     pub fn list(&self, request: &ListRequest) -> ListResponse {
         ListResponse {
@@ -344,6 +353,41 @@ pub fn convert(to: &Value, from: &Value) -> Option<Value> {
         Value::Natural8(_) => ints!(Natural8, u8),
         Value::Empty | Value::String(_) | Value::Unstructured(_) => return None,
     })
+}
+
+/// The value of a register given as text, the way the specification maps registers to
+/// environment variables and PyCyphal's `ValueProxy.assign_environment_variable` reads them:
+/// text into a string or unstructured register as is; into a numeric register as
+/// space-separated decimals (all integers: an `integer64` array, else a `real64` one, at most 32),
+/// then [`convert`]ed to the register's type. No tokens leave the value unchanged. `None` where
+/// PyCyphal raises (a token that is not a number, a value out of range).
+pub fn parse_value(template: &Value, text: &str) -> Option<Value> {
+    if !template.is_numeric() {
+        let bytes = heapless::Vec::from_slice(text.as_bytes()).ok()?;
+        return convert(template, &Value::String(bytes));
+    }
+    let mut ints: heapless::Vec<i64, 32> = heapless::Vec::new();
+    let mut floats: heapless::Vec<f64, 32> = heapless::Vec::new();
+    let mut all_ints = true;
+    for token in text.split_whitespace() {
+        let (i, f) = match token.parse::<i64>() {
+            Ok(i) => (i, i as f64),
+            Err(_) => {
+                all_ints = false;
+                (0, token.parse::<f64>().ok()?)
+            }
+        };
+        ints.push(i).ok()?;
+        floats.push(f).ok()?;
+    }
+    let source = if ints.is_empty() {
+        Value::Empty
+    } else if all_ints {
+        Value::Integer64(ints)
+    } else {
+        Value::Real64(floats)
+    };
+    convert(template, &source)
 }
 
 /// A command accepted over `uavcan.node.ExecuteCommand`, for the owner to carry out.
