@@ -50,7 +50,7 @@ fn main() {
     let bytes = std::fs::metadata(&log).unwrap().len();
     let t0 = Clock::now();
     let input = std::io::BufReader::new(std::fs::File::open(&log).unwrap());
-    let rows = propid::replay::replay(input, "bus.log", 110, std::io::sink()).unwrap();
+    let rows = propid_io::candump::replay(input, "bus.log", 110, std::io::sink()).unwrap();
     let secs = t0.elapsed().as_secs_f64();
     assert_eq!(rows, transfers);
     println!(

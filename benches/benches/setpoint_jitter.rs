@@ -9,8 +9,8 @@
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use propid::drive::{drive, DriveConfig};
-use propid::sim::{Excitation, Pattern};
+use propid_drive::drive::{drive, DriveConfig};
+use propid_science::excitation::{Excitation, Pattern};
 use propid_transport::{CanTransport, Frame, MemoryBus, TransportError};
 
 /// Records when setpoint frames (subject 24, first frame) are sent.
@@ -82,6 +82,7 @@ fn main() {
         &mut rec,
         &mut std::io::sink(),
         &AtomicBool::new(false),
+        &mut |_| {},
     );
     let ours: Vec<f64> = rec
         .sent

@@ -1,34 +1,31 @@
-//! # propid (host library and CLI)
+//! # propid (the command)
 //!
-//! Everything the `propid` command does lives here as a library, so tests call it directly and
-//! the binary stays a thin argument parser. Data flows through one currency, [`tsv::Sample`]:
-//! producers (`drive`, `replay`, `sim`, the importers) write the canonical TSV, consumers (`fit`,
-//! `diagnose`, plots) read it.
+//! The `propid` binary is thin: clap arguments, files and standard streams, progress bars,
+//! plots, signal handlers and exit codes. Everything it computes lives in libraries that tests
+//! call directly:
+//!
+//! ```text
+//!  propid-core       no_std Cyphal/CAN stack, DSDL codecs, estimator, load model
+//!  propid-transport  CanTransport: SLCAN (all OSes), SocketCAN (Linux), memory bus
+//!  propid-io         the TSV sample stream, importers, candump logs
+//!  propid-science    excitation, stand simulators, fit, diagnosis
+//!  propid-drive      the driver and the simulated Telega
+//!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
+//! ```
 #![deny(missing_docs)]
 
 pub mod bus;
-pub mod demo;
-pub mod diagnose;
-pub mod drive;
-pub mod fit;
-pub mod import;
+pub mod cmd;
 pub mod plot;
-pub mod replay;
-pub mod sim;
-pub mod sim_drive;
-pub mod steady;
-pub mod tsv;
+pub mod signals;
 
-/// An error caused by bad input (a file's content, an argument's value). The binary exits with
-/// status 2 for these and 1 for everything else.
-#[derive(Clone, Debug, thiserror::Error)]
-#[error("{0}")]
-pub struct InputError(pub String);
+pub use propid_io::InputError;
 
 /// The exit status for an error: 2 for bad input, 1 otherwise.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
     let bad_input = err.chain().any(|e| {
-        e.downcast_ref::<InputError>().is_some() || e.downcast_ref::<tsv::TsvError>().is_some()
+        e.downcast_ref::<InputError>().is_some()
+            || e.downcast_ref::<propid_io::tsv::TsvError>().is_some()
     });
     if bad_input {
         2

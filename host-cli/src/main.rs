@@ -15,35 +15,35 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Drive a Telega over Cyphal/CAN with the identification pattern and record its feedback as TSV.
-    Drive(propid::drive::Args),
+    Drive(propid::cmd::drive::Args),
     /// Fit inertia and drag (m, c1, c2) to a recorded TSV, like the seed regressor but exact.
-    Fit(propid::fit::Args),
+    Fit(propid::cmd::fit::Args),
     /// Simulate a test stand and write the TSV `drive` would have recorded.
-    Sim(propid::sim::Args),
+    Sim(propid::cmd::sim::Args),
     /// Find what the fitted model gets wrong, name the cause, extend the model and measure the gain.
-    Diagnose(propid::diagnose::Args),
+    Diagnose(propid::cmd::diagnose::Args),
     /// Convert measured logs from other test stands into propid's TSV.
     #[command(subcommand)]
-    Import(propid::import::Command),
+    Import(propid::cmd::import::Command),
     /// Run a simulated Telega as a Cyphal node on a CAN interface.
-    SimDrive(propid::sim_drive::Args),
+    SimDrive(propid::cmd::sim_drive::Args),
     /// Reassemble a candump log and write the feedback subject as TSV.
-    Replay(propid::replay::Args),
+    Replay(propid::cmd::replay::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
-    Demo(propid::demo::Args),
+    Demo(propid::cmd::demo::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Drive(a) => propid::drive::run(a),
-        Command::Fit(a) => propid::fit::run(a),
-        Command::Sim(a) => propid::sim::run(a),
-        Command::Diagnose(a) => propid::diagnose::run(a),
-        Command::Import(c) => propid::import::run(c),
-        Command::SimDrive(a) => propid::sim_drive::run(a),
-        Command::Replay(a) => propid::replay::run(a),
-        Command::Demo(a) => propid::demo::run(a),
+        Command::Drive(a) => propid::cmd::drive::run(a),
+        Command::Fit(a) => propid::cmd::fit::run(a),
+        Command::Sim(a) => propid::cmd::sim::run(a),
+        Command::Diagnose(a) => propid::cmd::diagnose::run(a),
+        Command::Import(c) => propid::cmd::import::run(c),
+        Command::SimDrive(a) => propid::cmd::sim_drive::run(a),
+        Command::Replay(a) => propid::cmd::replay::run(a),
+        Command::Demo(a) => propid::cmd::demo::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -10,49 +10,7 @@ use anyhow::Context;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-/// How a series is drawn.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Style {
-    /// A line through the points.
-    Line,
-    /// Small dots (for dense measured data).
-    Points,
-}
-
-/// One named data series.
-#[derive(Clone, Debug)]
-pub struct Series {
-    /// Legend label.
-    pub name: String,
-    /// X values.
-    pub x: Vec<f64>,
-    /// Y values (same length as `x`; NaN points are skipped).
-    pub y: Vec<f64>,
-    /// Line or points.
-    pub style: Style,
-}
-
-/// One panel of a figure: a y axis and its series.
-#[derive(Clone, Debug)]
-pub struct Panel {
-    /// Panel title.
-    pub title: String,
-    /// Y axis label with unit.
-    pub y_label: String,
-    /// The series drawn in this panel.
-    pub series: Vec<Series>,
-}
-
-/// A figure: panels stacked vertically, one x quantity.
-#[derive(Clone, Debug)]
-pub struct Figure {
-    /// Figure title.
-    pub title: String,
-    /// X axis label with unit.
-    pub x_label: String,
-    /// The panels, top to bottom.
-    pub panels: Vec<Panel>,
-}
+pub use propid_science::figure::{Figure, Panel, Series, Style};
 
 /// Pixel size of one panel.
 const PANEL_HEIGHT: u32 = 300;

@@ -9,10 +9,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use propid::drive::{drive, DriveConfig, StopReason};
-use propid::sim::{Excitation, Pattern, StandConfig};
-use propid::sim_drive::{run_sim_drive, SimDriveConfig, SimDriveSummary};
 use propid_core::dsdl::Readiness;
+use propid_drive::drive::{drive, DriveConfig, StopReason};
+use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig, SimDriveSummary};
+use propid_science::excitation::{Excitation, Pattern};
+use propid_science::stand::StandConfig;
 use propid_slcan::SlcanTransport;
 use serialport::{SerialPort, TTYPort};
 
@@ -71,7 +72,7 @@ fn drives_the_simulated_telega_and_fits_it() {
     };
     let mut out = Vec::new();
     let mut t = SlcanTransport::from_port(Box::new(drive_end), "driver");
-    let outcome = drive(&cfg, &mut t, &mut out, &AtomicBool::new(false));
+    let outcome = drive(&cfg, &mut t, &mut out, &AtomicBool::new(false), &mut |_| {});
     std::thread::sleep(Duration::from_millis(100));
     stop.store(true, Ordering::Relaxed);
     let summary = telega.join().unwrap().unwrap();

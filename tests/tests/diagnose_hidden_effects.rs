@@ -13,8 +13,9 @@
 //! (Ḟ, ȧ), and noise in a regressor biases its coefficient towards zero (errors in variables):
 //! the estimates come out 4–16 % short.
 
-use propid::diagnose::{diagnose, Options, Report};
-use propid::sim::{simulate, Excitation, Pattern, StandConfig};
+use propid_science::diagnose::{diagnose, Options, Report};
+use propid_science::excitation::{Excitation, Pattern};
+use propid_science::stand::{simulate, StandConfig};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 

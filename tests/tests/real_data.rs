@@ -1,9 +1,9 @@
 //! The importers on real test-stand logs (tests/data/esc_test_alspitz, MIT) and what diagnose
 //! finds there: facts computed from the data, checked against physical expectations.
 
-use propid::diagnose::{diagnose, Options};
-use propid::import::{import_autoquad, import_rcbench};
-use propid::tsv::Sample;
+use propid_io::import::{import_autoquad, import_rcbench};
+use propid_io::tsv::Sample;
+use propid_science::diagnose::{diagnose, Options};
 
 fn data(path: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -11,7 +11,7 @@ fn data(path: &str) -> std::path::PathBuf {
         .join(path)
 }
 
-fn samples(rows: &[propid::tsv::Row]) -> Vec<Sample> {
+fn samples(rows: &[propid_io::tsv::Row]) -> Vec<Sample> {
     rows.iter().map(|r| r.sample).collect()
 }
 

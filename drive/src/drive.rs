@@ -1,4 +1,4 @@
-//! `propid drive`: the seed's driver as a Cyphal node.
+//! The seed's driver as a Cyphal node.
 //!
 //! ```text
 //!  DriveConfig (PyCyphal register env vars or flags) ─► validate before anything is sent
@@ -12,79 +12,24 @@
 //! ```
 
 use std::io::Write;
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 use std::time::Duration;
 
-use anyhow::Context;
 use propid_core::can::{Mtu, Priority};
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
-use propid_core::node::{Event, Node, NodeConfig};
+use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
 use propid_transport::{CanTransport, HostClock};
 
-use crate::sim::{Excitation, Pattern};
-use crate::tsv::{Row, Sample, TsvWriter};
-use crate::InputError;
+use propid_io::tsv::{Row, Sample, TsvWriter};
+use propid_io::InputError;
+use propid_science::excitation::Excitation;
 
-/// The node type of the host tools: 8 ports, 16 sessions, 512-byte transfers, 256 queued frames.
-pub type HostNode = Node<8, 16, 512, 256>;
+use crate::HostNode;
 
 /// How many times the stop command (STANDBY + zero setpoint) is sent.
 pub const STOP_REPEATS: usize = 5;
-
-/// Arguments of `propid drive` (each also read from the PyCyphal register variable named).
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// This node's ID (register uavcan.node.id).
-    #[arg(long, env = "UAVCAN__NODE__ID")]
-    pub node_id: Option<u8>,
-    /// The bus.
-    #[command(flatten)]
-    pub bus: crate::bus::BusArgs,
-    /// Subject-ID of the readiness publisher; no readiness is published when unset
-    /// (uavcan.pub.readiness.id).
-    #[arg(long, env = "UAVCAN__PUB__READINESS__ID")]
-    pub readiness_id: Option<u16>,
-    /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id).
-    #[arg(long, env = "UAVCAN__PUB__SP_RAT__ID")]
-    pub setpoint_id: Option<u16>,
-    /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id).
-    #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
-    pub feedback_id: Option<u16>,
-    /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi).
-    #[arg(long, env = "SETPOINT_RAT_LO_HI", default_value = "0.1 0.9")]
-    pub setpoint_rat_lo_hi: String,
-    /// Period of the sinusoid [s] (register period).
-    #[arg(long, env = "PERIOD", default_value_t = 2.0)]
-    pub period: f64,
-    /// Duration of the pattern [s] (register pattern_duration).
-    #[arg(long, env = "PATTERN_DURATION", default_value_t = 200.0)]
-    pub pattern_duration: f64,
-    /// Duration of the initial run at the high setpoint [s] (register init_duration).
-    #[arg(long, env = "INIT_DURATION", default_value_t = 5.0)]
-    pub init_duration: f64,
-    /// Setpoint publication period [s] (register setpoint_period).
-    #[arg(long, env = "SETPOINT_PERIOD", default_value_t = 0.005)]
-    pub setpoint_period: f64,
-    /// Pattern after the init phase (the seed: sine).
-    #[arg(long, value_enum, default_value_t = Pattern::Sine)]
-    pub pattern: Pattern,
-    /// Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s].
-    #[arg(long, default_value_t = 0.5)]
-    pub deadman: f64,
-    /// Print the running estimate of J, c1, c2 on stderr while driving.
-    #[arg(long)]
-    pub fit: bool,
-    /// Write the TSV here instead of standard output.
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-    /// Progress on stderr once a second.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    pub progress: bool,
-}
 
 /// A validated configuration.
 #[derive(Clone, Debug)]
@@ -105,10 +50,8 @@ pub struct DriveConfig {
     pub setpoint_period: f64,
     /// Deadman timeout [s].
     pub deadman: f64,
-    /// Running fit on stderr.
+    /// Keep a running estimate of J, c1, c2 (reported in [`DriveEvent::Progress`]).
     pub fit: bool,
-    /// Progress on stderr.
-    pub progress: bool,
 }
 
 impl DriveConfig {
@@ -125,101 +68,50 @@ impl DriveConfig {
             setpoint_period: 0.005,
             deadman: 0.5,
             fit: false,
-            progress: false,
         }
     }
 }
 
-impl Args {
-    /// Checks everything before anything is sent.
-    pub fn config(&self) -> Result<DriveConfig, InputError> {
-        let need = |v: Option<u16>, what: &str, var: &str| {
-            v.ok_or_else(|| {
-                InputError(format!(
-                    "{what} is not set: give --{} or {var}",
-                    what.replace(' ', "-")
-                ))
-            })
-        };
-        let node_id = self.node_id.ok_or_else(|| {
-            InputError("node id is not set: give --node-id or UAVCAN__NODE__ID".into())
-        })?;
-        if node_id > 127 {
+impl DriveConfig {
+    /// Checks every value before anything is sent.
+    pub fn validate(&self) -> Result<(), InputError> {
+        if self.node_id > 127 {
             return Err(InputError(format!(
-                "node id must be 0..=127 (got {node_id})"
+                "node id must be 0..=127 (got {})",
+                self.node_id
             )));
         }
-        let setpoint_id = need(self.setpoint_id, "setpoint id", "UAVCAN__PUB__SP_RAT__ID")?;
-        let feedback_id = need(self.feedback_id, "feedback id", "UAVCAN__SUB__FB_DYN__ID")?;
         for (name, id) in [
-            ("setpoint", Some(setpoint_id)),
-            ("feedback", Some(feedback_id)),
+            ("setpoint", Some(self.setpoint_id)),
+            ("feedback", Some(self.feedback_id)),
             ("readiness", self.readiness_id),
         ] {
-            if id.is_some_and(|id| id > 8191) {
+            if let Some(id) = id.filter(|id| *id > 8191) {
                 return Err(InputError(format!(
-                    "{name} subject-ID must be 0..=8191 (got {})",
-                    id.unwrap_or(0)
+                    "{name} subject-ID must be 0..=8191 (got {id})"
                 )));
             }
         }
-        let lohi: Vec<f64> = self
-            .setpoint_rat_lo_hi
-            .split(|c: char| c.is_whitespace() || c == ',')
-            .filter(|s| !s.is_empty())
-            .map(|s| s.parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|_| {
-                InputError(format!(
-                    "setpoint_rat_lo_hi `{}` is not two numbers",
-                    self.setpoint_rat_lo_hi
-                ))
-            })?;
-        let [lo, hi] = lohi[..] else {
-            return Err(InputError(format!(
-                "setpoint_rat_lo_hi `{}` is not two numbers",
-                self.setpoint_rat_lo_hi
-            )));
-        };
-        let excitation = Excitation {
-            lo,
-            hi,
-            period: self.period,
-            duration: self.pattern_duration,
-            init_duration: self.init_duration,
-            pattern: self.pattern,
-        };
-        excitation.validate()?;
+        self.excitation.validate()?;
         if !(self.setpoint_period > 0.0 && self.setpoint_period < 1.0) {
             return Err(InputError(format!(
                 "setpoint_period must be in (0, 1) s (got {})",
                 self.setpoint_period
             )));
         }
-        if self.deadman.is_nan() || self.deadman <= 0.0 {
+        if !(self.deadman > 0.0 && self.deadman <= 60.0) {
             return Err(InputError(format!(
-                "--deadman must be positive (got {})",
+                "the deadman timeout must be in (0, 60] s (got {})",
                 self.deadman
             )));
         }
-        if self.bus.mtu != 8 && self.bus.mtu != 64 {
+        if self.mtu != 8 && self.mtu != 64 {
             return Err(InputError(format!(
                 "MTU must be 8 or 64 (got {})",
-                self.bus.mtu
+                self.mtu
             )));
         }
-        Ok(DriveConfig {
-            node_id,
-            mtu: self.bus.mtu,
-            readiness_id: self.readiness_id,
-            setpoint_id,
-            feedback_id,
-            excitation,
-            setpoint_period: self.setpoint_period,
-            deadman: self.deadman,
-            fit: self.fit,
-            progress: self.progress,
-        })
+        Ok(())
     }
 }
 
@@ -234,6 +126,24 @@ pub enum StopReason {
     LostFeedback,
     /// A transport or output error.
     Error(String),
+}
+
+/// What the drive reports while it runs (the caller decides what to show).
+#[derive(Clone, Debug, PartialEq)]
+pub enum DriveEvent {
+    /// The init phase is over and recording begins.
+    PatternStarted,
+    /// Once a second during the pattern.
+    Progress {
+        /// Seconds into the pattern.
+        elapsed: f64,
+        /// Feedback rows in the last second.
+        feedback_per_s: u64,
+        /// Transfers the reassembler rejected so far.
+        dropped_transfers: u64,
+        /// The running estimate (J, c1, c2), when `fit` is on and the data identify it.
+        estimate: Option<(f64, f64, f64)>,
+    },
 }
 
 /// What a drive did.
@@ -299,6 +209,7 @@ pub fn drive(
     transport: &mut dyn CanTransport,
     out: &mut dyn Write,
     stop: &AtomicBool,
+    events: &mut dyn FnMut(DriveEvent),
 ) -> DriveOutcome {
     let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
     let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", mtu);
@@ -339,12 +250,7 @@ pub fn drive(
                     Err(e) => break StopReason::Error(format!("cannot write the TSV: {e}")),
                 }
             }
-            if cfg.progress {
-                eprintln!(
-                    "drive: pattern commenced ({:?}, {} s)",
-                    ex.pattern, ex.duration
-                );
-            }
+            events(DriveEvent::PatternStarted);
         }
         let elapsed = pattern_start.map(|p| now.saturating_duration_since(p).as_secs_f64());
         if elapsed.is_some_and(|e| e >= ex.duration) {
@@ -413,21 +319,18 @@ pub fn drive(
         if cfg.fit && sample.is_finite() {
             estimator.update(sample.force, sample.velocity, sample.acceleration);
         }
-        if cfg.progress && event_now >= next_progress {
-            let st = d.node.stats();
-            let mut line = format!(
-                "drive: pattern {:.1}/{:.0} s, feedback {} /s, dropped transfers {}",
-                elapsed.unwrap_or(0.0),
-                ex.duration,
-                rows - rows_at_progress,
-                st.rx.rejected_total()
-            );
-            if cfg.fit {
-                if let Ok(e) = estimator.estimate(&LoadBounds::default()) {
-                    line += &format!(", J = {:.4e}, c2 = {:.4e}", e.mass, e.c2);
-                }
-            }
-            eprintln!("{line}");
+        if event_now >= next_progress {
+            let estimate = cfg
+                .fit
+                .then(|| estimator.estimate(&LoadBounds::default()).ok())
+                .flatten()
+                .map(|e| (e.mass, e.c1, e.c2));
+            events(DriveEvent::Progress {
+                elapsed: elapsed.unwrap_or(0.0),
+                feedback_per_s: rows - rows_at_progress,
+                dropped_transfers: d.node.stats().rx.rejected_total(),
+                estimate,
+            });
             rows_at_progress = rows;
             next_progress = next_progress + Duration::from_secs(1);
         }
@@ -441,42 +344,5 @@ pub fn drive(
         reason,
         rows,
         estimate,
-    }
-}
-
-/// Runs `propid drive`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let cfg = args.config()?;
-    let mut transport = args.bus.open()?;
-    let stop = Arc::new(AtomicBool::new(false));
-    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
-        signal_hook::flag::register(signal, Arc::clone(&stop))
-            .context("installing signal handlers")?;
-    }
-    let mut out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        ),
-        None => Box::new(std::io::stdout()),
-    };
-    let outcome = drive(&cfg, transport.as_mut(), &mut out, &stop);
-    let why = match &outcome.reason {
-        StopReason::Completed => "the pattern is complete".to_string(),
-        StopReason::Signal => "interrupted by a signal".to_string(),
-        StopReason::LostFeedback => format!("no feedback for {} s (deadman)", cfg.deadman),
-        StopReason::Error(e) => format!("error: {e}"),
-    };
-    eprintln!(
-        "drive: stopped ({why}); STANDBY and a zero setpoint sent {STOP_REPEATS} times; {} rows written",
-        outcome.rows
-    );
-    if let Some((m, c1, c2)) = outcome.estimate.filter(|_| cfg.fit) {
-        eprintln!("drive: running estimate J = {m:.6e}, c1 = {c1:.3e}, c2 = {c2:.6e}");
-    }
-    match outcome.reason {
-        StopReason::Completed => Ok(()),
-        StopReason::Signal => std::process::exit(130),
-        StopReason::LostFeedback => anyhow::bail!("feedback lost"),
-        StopReason::Error(e) => anyhow::bail!(e),
     }
 }

@@ -18,9 +18,12 @@ use propid_core::dsdl::Readiness;
 use propid_slcan::SlcanTransport;
 use serialport::{SerialPort, TTYPort};
 
-use crate::drive::{drive, DriveConfig, StopReason};
-use crate::sim::{Excitation, Pattern, StandConfig};
-use crate::sim_drive::{run_sim_drive, SimDriveConfig};
+use propid_drive::drive::{drive, DriveConfig, StopReason};
+use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
+use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
+use propid_science::excitation::{Excitation, Pattern};
+use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
+use propid_science::stand::StandConfig;
 
 /// Arguments of `propid demo`.
 #[derive(clap::Args, Debug)]
@@ -35,7 +38,7 @@ pub struct Args {
     #[arg(long, default_value_t = 2.0)]
     pub init_duration: f64,
     /// Excitation (a chirp separates the effects better than the seed's sinusoid).
-    #[arg(long, value_enum, default_value_t = Pattern::Chirp)]
+    #[arg(long, default_value_t = Pattern::Chirp)]
     pub pattern: Pattern,
     /// A torque lag hidden in the simulated drive [s] (0: none), for diagnose to find.
     #[arg(long, default_value_t = 0.012)]
@@ -82,7 +85,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let cfg = DriveConfig {
         fit: true,
-        progress: true,
         ..DriveConfig::example(excitation)
     };
     let tsv = args.out.join("run.tsv");
@@ -90,7 +92,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
     let mut transport = SlcanTransport::from_port(Box::new(drive_end), &pty);
     let never = AtomicBool::new(false);
-    let outcome = drive(&cfg, &mut transport, &mut file, &never);
+    let outcome = drive(&cfg, &mut transport, &mut file, &never, &mut |e| {
+        crate::cmd::drive::print_event(e, &excitation, true)
+    });
     // Give the last STANDBY frames time to arrive before the simulated drive stops.
     std::thread::sleep(std::time::Duration::from_millis(100));
     stop_sim.store(true, Ordering::Relaxed);
@@ -107,40 +111,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
 
     // Fit, as the seed regressor would, and plot.
-    let fit_args = crate::fit::Args {
-        file: Some(tsv.clone()),
-        mass_min: 1e-9,
-        mass_max: 1e3,
-        c1_max: 0.0,
-        c2_max: 1e2,
+    let fit_options = FitOptions {
         diameter: Some(0.1778),
-        density: 1.225,
-        format: crate::fit::Format::Yaml,
-        plot: None,
-        progress: false,
+        ..FitOptions::default()
     };
-    let (fit, samples) = crate::fit::fit_path(&tsv, &fit_args)?;
-    let fit_yaml = crate::fit::to_yaml(&fit);
+    let (fit, samples) = fit_path(&tsv, &fit_options, &mut |_, _| {})?;
+    let fit_yaml = to_yaml(&fit);
     std::fs::write(args.out.join("fit.yaml"), &fit_yaml)?;
-    crate::plot::write(
-        &args.out.join("fit.svg"),
-        &crate::fit::figure(&fit, &samples),
-    )?;
+    crate::plot::write(&args.out.join("fit.svg"), &figure(&fit, &samples))?;
 
     // Diagnose.
-    let (all, _) = crate::diagnose::read_samples(&tsv)?;
-    let report = crate::diagnose::diagnose(&all, Default::default())
+    let (all, _) = read_samples(&tsv)?;
+    let report = diagnose(&all, Default::default())
         .map_err(|e| anyhow::anyhow!("{}: {}", tsv.display(), e.0))?;
-    let text = crate::diagnose::to_text(&report, &tsv.display().to_string());
+    let text = to_text(&report, &tsv.display().to_string());
     std::fs::write(args.out.join("diagnose.txt"), &text)?;
     std::fs::write(
         args.out.join("diagnose.json"),
         serde_json::to_string_pretty(&report)?,
     )?;
-    crate::plot::write(
-        &args.out.join("diagnose.svg"),
-        &crate::diagnose::report_figure(&report),
-    )?;
+    crate::plot::write(&args.out.join("diagnose.svg"), &report_figure(&report))?;
 
     let standby_last =
         summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);

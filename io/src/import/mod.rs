@@ -1,11 +1,11 @@
-//! `propid import`: measured logs from other test stands into propid's TSV.
+//! Importers: measured logs from other test stands into propid's TSV.
 //!
 //! ```text
 //!  AutoQuad ESC32 telemetry (CSV) ─► t = row × 10 ms, ω = rpm·2π/60, Q = Kt·I_bus/duty ─┐
 //!  RCbenchmark log (CSV)          ─► t, ω = rpm·2π/60, Q = load-cell torque (sparse)  ─┴─► TSV
 //!                                    acceleration = central difference of ω (both)
 //! ```
-//! Importers convert units and say what they assume, on stderr and in `docs/REAL_DATA.md`. They
+//! Importers convert units and say what they assume (in [`Imported::assumptions`], which the command prints). They
 //! never smooth, shift or filter a signal, so what `diagnose` finds is in the data. The one
 //! derived column is the acceleration, a plain central difference of the measured velocity
 //! ((ω[k+1] − ω[k−1]) / (t[k+1] − t[k−1])), because neither stand logs one.
@@ -13,39 +13,13 @@
 mod autoquad;
 mod rcbench;
 
-use std::path::{Path, PathBuf};
-
-use anyhow::Context;
+use std::path::Path;
 
 use crate::tsv::{Row, TsvWriter};
 use crate::InputError;
 
 pub use autoquad::import_autoquad;
 pub use rcbench::import_rcbench;
-
-/// The importers.
-#[derive(clap::Subcommand, Debug)]
-pub enum Command {
-    /// AutoQuad ESC32 telemetry (duty, bus current, rpm): torque = Kt·I_bus/duty, Kt = 60/(2π·kv).
-    Autoquad {
-        /// The ESC32 Configuration Utility CSV.
-        file: PathBuf,
-        /// The motor's kv [rpm/V] (gives Kt = 60/(2π·kv) N·m/A).
-        #[arg(long)]
-        kv: f64,
-        /// Output TSV (standard output if omitted).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
-    /// RCbenchmark (Tyto Robotics) stand log: load-cell torque and electrical rpm.
-    Rcbench {
-        /// The RCbenchmark CSV export.
-        file: PathBuf,
-        /// Output TSV (standard output if omitted).
-        #[arg(short, long)]
-        output: Option<PathBuf>,
-    },
-}
 
 /// An imported recording: the rows and what was assumed.
 pub struct Imported {
@@ -130,31 +104,11 @@ pub(crate) fn number(
     })
 }
 
-fn write(imported: &Imported, output: Option<&Path>) -> anyhow::Result<()> {
-    for a in &imported.assumptions {
-        eprintln!("import: {a}");
-    }
-    let out: Box<dyn std::io::Write> = match output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
+/// Writes an imported recording as propid's TSV.
+pub fn write_tsv<W: std::io::Write>(imported: &Imported, out: W) -> std::io::Result<W> {
     let mut w = TsvWriter::new(out, false)?;
     for r in &imported.rows {
         w.write(r)?;
     }
-    w.into_inner()?;
-    eprintln!("import: {} rows", imported.rows.len());
-    Ok(())
-}
-
-/// Runs an importer.
-pub fn run(command: Command) -> anyhow::Result<()> {
-    match command {
-        Command::Autoquad { file, kv, output } => {
-            write(&import_autoquad(&file, kv)?, output.as_deref())
-        }
-        Command::Rcbench { file, output } => write(&import_rcbench(&file)?, output.as_deref()),
-    }
+    w.into_inner()
 }

@@ -1,4 +1,4 @@
-//! `propid replay`: a candump log back into the TSV `propid drive` would have written.
+//! candump logs (`candump -L`): back into the TSV `propid drive` would have written.
 //!
 //! ```text
 //!  "(1700000000.123456) can0 1060642A#03E0"  (candump -L; CAN FD: "ID##<flags><data>")
@@ -8,29 +8,14 @@
 //! skipped, as a live subscriber would skip them.
 
 use std::io::{BufRead, Write};
-use std::path::PathBuf;
 use std::time::Duration;
 
-use anyhow::Context;
 use propid_core::can::{Frame, Port, Reassembler, Subscription, TransferKind};
 use propid_core::dsdl::{DataType, DoF3rdTs};
 use propid_core::time::Instant;
 
 use crate::tsv::{Row, Sample, TsvWriter};
 use crate::InputError;
-
-/// Arguments of `propid replay`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// The candump log (`candump -L` format); `-` for standard input.
-    pub file: PathBuf,
-    /// Subject-ID of the dynamics feedback.
-    #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
-    pub feedback_id: u16,
-    /// Output TSV (standard output if omitted).
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-}
 
 /// Parses one `candump -L` line into a frame. `Err` says what is wrong.
 pub fn parse_candump_line(line: &str) -> Result<Option<Frame>, String> {
@@ -92,24 +77,51 @@ pub fn parse_candump_line(line: &str) -> Result<Option<Frame>, String> {
         .ok_or_else(|| format!("ID {id:08X} has more than 29 bits"))
 }
 
+/// Why a replay stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// The log is malformed.
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// Reading the log failed.
+    #[error("line {line}: {source}")]
+    Read {
+        /// 1-based line number.
+        line: u64,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// Writing the TSV failed.
+    #[error("writing the TSV: {0}")]
+    Write(#[from] std::io::Error),
+}
+
 /// Replays a log: returns the rows written.
 pub fn replay(
     input: impl BufRead,
     name: &str,
     feedback_id: u16,
     out: impl Write,
-) -> anyhow::Result<u64> {
+) -> Result<u64, ReplayError> {
     let mut rx: Reassembler<1, 32, 64> = Reassembler::new(None);
     rx.subscribe(Subscription {
         port: Port::Subject(feedback_id),
         extent: DoF3rdTs::EXTENT_BYTES,
         transfer_id_timeout: Duration::from_secs(2),
     })
-    .map_err(|_| anyhow::anyhow!("subscription"))?;
+    .map_err(|_| {
+        InputError(format!(
+            "feedback subject {feedback_id} cannot be subscribed"
+        ))
+    })?;
     let mut writer = TsvWriter::new(out, false)?;
     let mut rows = 0;
     for (k, line) in input.lines().enumerate() {
-        let line = line.with_context(|| format!("{name}: line {}", k + 1))?;
+        let line = line.map_err(|e| ReplayError::Read {
+            line: k as u64 + 1,
+            source: e,
+        })?;
         let frame = parse_candump_line(&line)
             .map_err(|why| InputError(format!("{name}: line {}: {why}", k + 1)))?;
         let Some(frame) = frame else { continue };
@@ -137,30 +149,6 @@ pub fn replay(
     }
     writer.into_inner()?;
     Ok(rows)
-}
-
-/// Runs `propid replay`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let name = args.file.display().to_string();
-    let input: Box<dyn BufRead> = if name == "-" {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        let f = std::fs::File::open(&args.file)
-            .map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
-        Box::new(std::io::BufReader::new(f))
-    };
-    let out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
-    let rows = replay(input, &name, args.feedback_id, out)?;
-    eprintln!(
-        "replay: {rows} feedback messages on subject {}",
-        args.feedback_id
-    );
-    Ok(())
 }
 
 #[cfg(test)]

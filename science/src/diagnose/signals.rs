@@ -1,7 +1,7 @@
 //! The measured signals and the derived ones every candidate effect draws on.
 
-use crate::tsv::Sample;
-use crate::InputError;
+use propid_io::tsv::Sample;
+use propid_io::InputError;
 
 /// Half-width of the derivative window [s]: Ḟ and ȧ are local straight-line slopes over ±this.
 const DERIVATIVE_HALF_WINDOW: f64 = 0.01;

@@ -1,4 +1,4 @@
-//! `propid diagnose`: what the fitted model gets wrong, why, and how much better an extended
+//! Diagnosis: what the fitted model gets wrong, why, and how much better an extended
 //! model does.
 //!
 //! ## How data flows
@@ -26,17 +26,14 @@ mod steady;
 
 pub use steady::DragLaw;
 
-use std::path::PathBuf;
-
-use anyhow::Context;
 use serde::Serialize;
 
 pub use effects::{Effect, EffectKind};
 pub use report::{figure as report_figure, to_text};
 use signals::Signals;
 
-use crate::tsv::{Sample, TsvReader};
-use crate::InputError;
+use propid_io::tsv::{Sample, TsvError, TsvReader};
+use propid_io::InputError;
 
 /// Smallest relative reduction of the held-out acceleration error for an effect to be named.
 pub const MIN_GAIN: f64 = 0.03;
@@ -263,40 +260,18 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     }
 }
 
-/// Output format.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    /// A readable report.
-    Text,
-    /// JSON.
-    Json,
-}
-
-/// Arguments of `propid diagnose`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// The recording (canonical TSV; `-` for standard input).
-    pub file: PathBuf,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Text)]
-    pub format: Format,
-    /// Write plots (measured vs simulated velocity before and after, residuals): .svg, .png, .html.
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Largest number of effects to name.
-    #[arg(long, default_value_t = 3)]
-    pub max_effects: usize,
-}
-
 /// Reads every complete row of a TSV (rows with a non-finite t, force, velocity or acceleration
 /// are skipped and counted).
-pub fn read_samples(path: &std::path::Path) -> anyhow::Result<(Vec<Sample>, usize)> {
+pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), TsvError> {
     let name = path.display().to_string();
     let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
         Box::new(std::io::BufReader::new(std::io::stdin()))
     } else {
-        let f = std::fs::File::open(path)
-            .map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+        let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
+            source_name: name.clone(),
+            line: 0,
+            source: e,
+        })?;
         Box::new(std::io::BufReader::new(f))
     };
     let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;
@@ -309,33 +284,4 @@ pub fn read_samples(path: &std::path::Path) -> anyhow::Result<(Vec<Sample>, usiz
         }
     }
     Ok((out, skipped))
-}
-
-/// Runs `propid diagnose`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let (samples, skipped) = read_samples(&args.file)?;
-    let mut report = diagnose(
-        &samples,
-        Options {
-            max_effects: args.max_effects,
-        },
-    )
-    .map_err(|e| InputError(format!("{}: {}", args.file.display(), e.0)))?;
-    if skipped > 0 {
-        report
-            .notes
-            .push(format!("{skipped} rows with missing values were skipped"));
-    }
-    if let Some(path) = &args.plot {
-        crate::plot::write(path, &report::figure(&report))
-            .with_context(|| format!("writing the plot {}", path.display()))?;
-        eprintln!("plots written to {}", path.display());
-    }
-    let text = match args.format {
-        Format::Text => to_text(&report, &args.file.display().to_string()),
-        Format::Json => serde_json::to_string_pretty(&report)? + "\n",
-    };
-    use std::io::Write;
-    std::io::stdout().write_all(text.as_bytes())?;
-    Ok(())
 }

@@ -1,4 +1,5 @@
-//! `propid sim`: a simulated test stand that writes the TSV `propid drive` would have recorded.
+//! The formula-level stand simulator: the TSV `propid drive` would have recorded, from the same
+//! load equations the diagnosis tests for (see the mechanism-level simulator for an independent one).
 //!
 //! ## How data flows
 //! ```text
@@ -15,90 +16,15 @@
 //! hide one in the data and check that diagnose finds it. [`Stand`] is a stepping object, so the
 //! same model also runs in real time behind a Cyphal node (`propid sim-drive`).
 
-use std::io::Write;
-use std::path::PathBuf;
-
-use anyhow::Context;
 use propid_core::plant::{FirstOrderLag, Load, LoadParams};
 use rand::rngs::StdRng;
 use rand::SeedableRng;
 use rand_distr::{Distribution, Normal};
 
-use crate::tsv::{Row, Sample, TsvWriter};
-use crate::InputError;
+use propid_io::tsv::{Row, Sample};
+use propid_io::InputError;
 
-/// The shape of the setpoint after the init phase.
-#[derive(Clone, Copy, Debug, PartialEq, clap::ValueEnum, serde::Serialize)]
-pub enum Pattern {
-    /// The seed's sinusoid between lo and hi.
-    Sine,
-    /// Steps between lo and hi, a staircase of 5 levels up and down, each held half a period.
-    Steps,
-    /// A sine sweep between lo and hi from 1/period to 10/period.
-    Chirp,
-}
-
-/// The excitation the driver applies (shared with `propid drive`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Excitation {
-    /// Low setpoint (ratiometric, −1..1).
-    pub lo: f64,
-    /// High setpoint.
-    pub hi: f64,
-    /// Period of the sinusoid [s].
-    pub period: f64,
-    /// Duration of the pattern after the init phase [s].
-    pub duration: f64,
-    /// Init phase at `hi` before the pattern [s].
-    pub init_duration: f64,
-    /// The pattern.
-    pub pattern: Pattern,
-}
-
-impl Excitation {
-    /// The setpoint `t` seconds after the pattern began (init phase excluded).
-    pub fn setpoint(&self, t: f64) -> f64 {
-        let (lo, hi) = (self.lo, self.hi);
-        let lerp = |s: f64| lo + (hi - lo) * (s + 1.0) / 2.0;
-        match self.pattern {
-            // The seed: np.interp(sin(now / (period / 2π)), (−1, 1), (lo, hi)).
-            Pattern::Sine => lerp((std::f64::consts::TAU * t / self.period).sin()),
-            Pattern::Steps => {
-                const LEVELS: [f64; 8] = [0.0, 0.25, 0.5, 0.75, 1.0, 0.75, 0.5, 0.25];
-                let k = (t / (self.period / 2.0)).floor().max(0.0) as usize % LEVELS.len();
-                lo + (hi - lo) * LEVELS[k]
-            }
-            Pattern::Chirp => {
-                let (f0, f1) = (1.0 / self.period, 10.0 / self.period);
-                let d = self.duration.max(1e-9);
-                let phase = std::f64::consts::TAU * (f0 * t + (f1 - f0) * t * t / (2.0 * d));
-                lerp(phase.sin())
-            }
-        }
-    }
-
-    /// Checks the values a user may get wrong.
-    pub fn validate(&self) -> Result<(), InputError> {
-        if self.lo.is_nan()
-            || self.hi.is_nan()
-            || self.lo >= self.hi
-            || self.lo < -1.0
-            || self.hi > 1.0
-        {
-            return Err(InputError(format!(
-                "setpoint range must satisfy -1 ≤ lo < hi ≤ 1 (got lo = {}, hi = {})",
-                self.lo, self.hi
-            )));
-        }
-        if !(self.period > 0.0 && self.duration > 0.0 && self.init_duration >= 0.0) {
-            return Err(InputError(format!(
-                "period and duration must be positive and init duration non-negative (got {}, {}, {})",
-                self.period, self.duration, self.init_duration
-            )));
-        }
-        Ok(())
-    }
-}
+use crate::excitation::Excitation;
 
 /// Everything about the simulated stand.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -171,10 +97,10 @@ impl StandConfig {
     /// Checks that the values make a stand (positive inertia, rate, …).
     pub fn validate(&self) -> Result<(), InputError> {
         let positive = [
-            ("--inertia", self.inertia),
-            ("--rate", self.rate),
-            ("--max-torque", self.max_torque),
-            ("--drag-exponent", self.drag_exponent),
+            ("inertia", self.inertia),
+            ("rate", self.rate),
+            ("max_torque", self.max_torque),
+            ("drag_exponent", self.drag_exponent),
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
@@ -182,16 +108,16 @@ impl StandConfig {
             }
         }
         let non_negative = [
-            ("--c1", self.c1),
-            ("--c2", self.c2),
-            ("--coulomb", self.coulomb),
-            ("--torque-lag", self.torque_lag),
-            ("--force-sensor-lag", self.force_sensor_lag),
-            ("--acceleration-lag", self.acceleration_lag),
-            ("--noise-force", self.noise_force),
-            ("--noise-velocity", self.noise_velocity),
-            ("--noise-acceleration", self.noise_acceleration),
-            ("--jitter", self.jitter),
+            ("c1", self.c1),
+            ("c2", self.c2),
+            ("coulomb", self.coulomb),
+            ("torque_lag", self.torque_lag),
+            ("force_sensor_lag", self.force_sensor_lag),
+            ("acceleration_lag", self.acceleration_lag),
+            ("noise_force", self.noise_force),
+            ("noise_velocity", self.noise_velocity),
+            ("noise_acceleration", self.noise_acceleration),
+            ("jitter", self.jitter),
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
@@ -336,11 +262,11 @@ impl Stand {
 
     /// Runs the excitation (init phase not recorded, like the driver) and calls `sink` with each
     /// recorded row.
-    pub fn run(
+    pub fn run<E>(
         &mut self,
         excitation: &Excitation,
-        mut sink: impl FnMut(Row) -> anyhow::Result<()>,
-    ) -> anyhow::Result<u64> {
+        mut sink: impl FnMut(Row) -> Result<(), E>,
+    ) -> Result<u64, E> {
         let c = self.config;
         let start = self.time + excitation.init_duration;
         self.set_setpoint(excitation.hi);
@@ -373,176 +299,17 @@ pub fn simulate(config: StandConfig, excitation: &Excitation, seed: u64) -> Vec<
     let mut out = Vec::new();
     let mut stand = Stand::new(config, seed);
     // The sink never fails.
-    let _ = stand.run(excitation, |row| {
+    let Ok(_) = stand.run(excitation, |row| {
         out.push(row.sample);
-        Ok(())
+        Ok::<(), core::convert::Infallible>(())
     });
     out
-}
-
-/// The simulated stand's parameters as command-line options (shared by `sim`, `sim-drive` and
-/// `demo`).
-#[derive(clap::Args, Debug, Clone)]
-pub struct StandArgs {
-    /// Random seed for the noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Inertia J [kg·m²].
-    #[arg(long, default_value_t = StandConfig::default().inertia)]
-    pub inertia: f64,
-    /// Viscous friction c1 [N·m·s/rad] (hidden effect `viscous_friction`).
-    #[arg(long, default_value_t = 0.0)]
-    pub c1: f64,
-    /// Drag coefficient c2 [N·m·s²/rad²].
-    #[arg(long, default_value_t = StandConfig::default().c2)]
-    pub c2: f64,
-    /// Drag exponent p (hidden effect `drag_exponent` when ≠ 2).
-    #[arg(long, default_value_t = 2.0)]
-    pub drag_exponent: f64,
-    /// Coulomb friction [N·m] (hidden effect `coulomb_friction`).
-    #[arg(long, default_value_t = 0.0)]
-    pub coulomb: f64,
-    /// Torque ripple amplitude [N·m] (hidden effect `torque_ripple`).
-    #[arg(long, default_value_t = 0.0)]
-    pub ripple: f64,
-    /// Ripple periods per revolution.
-    #[arg(long, default_value_t = 6.0)]
-    pub ripple_harmonic: f64,
-    /// Torque at setpoint 1 [N·m].
-    #[arg(long, default_value_t = StandConfig::default().max_torque)]
-    pub max_torque: f64,
-    /// Lag of the felt torque behind the reported one [s] (hidden effect `torque_lag`).
-    #[arg(long, default_value_t = 0.0)]
-    pub torque_lag: f64,
-    /// Lag of the reported torque behind the felt one [s] (hidden effect `force_sensor_lag`).
-    #[arg(long, default_value_t = 0.0)]
-    pub force_sensor_lag: f64,
-    /// Lag of the reported acceleration [s] (hidden effect `acceleration_lag`).
-    #[arg(long, default_value_t = 0.0)]
-    pub acceleration_lag: f64,
-    /// Amplitude of a periodic external torque [N·m] (not a modelled effect: "unexplained").
-    #[arg(long, default_value_t = 0.0)]
-    pub disturbance: f64,
-    /// Frequency of the disturbance [Hz].
-    #[arg(long, default_value_t = 7.0)]
-    pub disturbance_hz: f64,
-    /// Feedback rate [Hz].
-    #[arg(long, default_value_t = 500.0)]
-    pub rate: f64,
-    /// Torque noise [N·m].
-    #[arg(long, default_value_t = StandConfig::default().noise_force)]
-    pub noise_force: f64,
-    /// Velocity noise [rad/s].
-    #[arg(long, default_value_t = StandConfig::default().noise_velocity)]
-    pub noise_velocity: f64,
-    /// Acceleration noise [rad/s²].
-    #[arg(long, default_value_t = StandConfig::default().noise_acceleration)]
-    pub noise_acceleration: f64,
-    /// Sampling-time jitter [s].
-    #[arg(long, default_value_t = StandConfig::default().jitter)]
-    pub jitter: f64,
-}
-
-/// Arguments of `propid sim`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// Output TSV (standard output if omitted).
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-    /// The stand.
-    #[command(flatten)]
-    pub stand: StandArgs,
-    /// Low setpoint.
-    #[arg(long, default_value_t = 0.1)]
-    pub lo: f64,
-    /// High setpoint.
-    #[arg(long, default_value_t = 0.9)]
-    pub hi: f64,
-    /// Period of the sinusoid [s].
-    #[arg(long, default_value_t = 2.0)]
-    pub period: f64,
-    /// Duration of the pattern [s].
-    #[arg(long, default_value_t = 60.0)]
-    pub duration: f64,
-    /// Init phase at the high setpoint [s].
-    #[arg(long, default_value_t = 5.0)]
-    pub init_duration: f64,
-    /// Pattern after the init phase.
-    #[arg(long, value_enum, default_value_t = Pattern::Sine)]
-    pub pattern: Pattern,
-}
-
-impl StandArgs {
-    /// The stand configuration these arguments describe (validated).
-    pub fn config(&self) -> Result<StandConfig, InputError> {
-        let config = self.config_unchecked();
-        config.validate()?;
-        Ok(config)
-    }
-
-    fn config_unchecked(&self) -> StandConfig {
-        StandConfig {
-            inertia: self.inertia,
-            c1: self.c1,
-            c2: self.c2,
-            drag_exponent: self.drag_exponent,
-            coulomb: self.coulomb,
-            ripple: self.ripple,
-            ripple_harmonic: self.ripple_harmonic,
-            max_torque: self.max_torque,
-            torque_lag: self.torque_lag,
-            force_sensor_lag: self.force_sensor_lag,
-            acceleration_lag: self.acceleration_lag,
-            disturbance: self.disturbance,
-            disturbance_hz: self.disturbance_hz,
-            rate: self.rate,
-            noise_force: self.noise_force,
-            noise_velocity: self.noise_velocity,
-            noise_acceleration: self.noise_acceleration,
-            jitter: self.jitter,
-        }
-    }
-}
-
-impl Args {
-    /// The excitation these arguments describe.
-    pub fn excitation(&self) -> Excitation {
-        Excitation {
-            lo: self.lo,
-            hi: self.hi,
-            period: self.period,
-            duration: self.duration,
-            init_duration: self.init_duration,
-            pattern: self.pattern,
-        }
-    }
-}
-
-/// Runs `propid sim`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let config = args.stand.config()?;
-    let excitation = args.excitation();
-    excitation.validate()?;
-    let out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
-    let mut writer = TsvWriter::new(out, false)?;
-    let mut stand = Stand::new(config, args.stand.seed);
-    let rows = stand.run(&excitation, |row| Ok(writer.write(&row)?))?;
-    writer.into_inner()?;
-    eprintln!(
-        "simulated {rows} rows ({} s at {} Hz)",
-        excitation.duration, config.rate
-    );
-    Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::excitation::Pattern;
 
     fn excitation(duration: f64) -> Excitation {
         Excitation {

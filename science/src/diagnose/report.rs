@@ -1,7 +1,7 @@
 //! The diagnosis as text and as plots.
 
 use super::Report;
-use crate::plot::{Figure, Panel, Series, Style};
+use crate::figure::{Figure, Panel, Series, Style};
 
 /// A readable report.
 pub fn to_text(r: &Report, source: &str) -> String {

@@ -1,4 +1,4 @@
-//! `propid fit`: the seed regressor, exact and in constant memory.
+//! The seed regressor, exact and in constant memory.
 //!
 //! ## How data flows
 //! ```text
@@ -14,60 +14,89 @@
 //! acceleration), which gives the same window on files whose other columns are complete.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, Read, Seek, Write};
-use std::path::{Path, PathBuf};
+use std::io::{BufRead, BufReader};
+use std::path::Path;
 
-use anyhow::Context;
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use crate::plot::{Figure, Panel, Series, Style};
-use crate::tsv::{Sample, TsvReader};
-use crate::InputError;
+use propid_io::tsv::{Sample, TsvError, TsvReader};
+use propid_io::InputError;
 
-/// Output format of `propid fit`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Format {
-    /// The seed's YAML keys (mass, c1, c2) with units, plus standard errors and the RMS.
-    Yaml,
-    /// The same as a JSON object.
-    Json,
-}
+use crate::figure::{Figure, Panel, Series, Style};
 
-/// Arguments of `propid fit`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// The TSV to fit (columns t, force, velocity, acceleration by header name); `-` or nothing
-    /// reads standard input.
-    pub file: Option<PathBuf>,
+/// What a fit is asked to do (checked once by [`FitOptions::check`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FitOptions {
     /// Smallest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e-9)]
     pub mass_min: f64,
-    /// Largest (rotational) mass [kg] or [kg·m²].
-    #[arg(long, default_value_t = 1e3)]
+    /// Largest (rotational) mass.
     pub mass_max: f64,
-    /// Largest viscous coefficient c1 [N·s/m] or [N·m·s/rad]; 0 (the seed's default) forbids
-    /// viscous friction.
-    #[arg(long, default_value_t = 0.0)]
+    /// Largest viscous coefficient c1; 0 (the seed's default) forbids viscous friction.
     pub c1_max: f64,
-    /// Largest quadratic drag coefficient c2 [N·s²/m²] or [N·m·s²/rad²].
-    #[arg(long, default_value_t = 1e2)]
+    /// Largest quadratic drag coefficient c2.
     pub c2_max: f64,
-    /// Propeller diameter [m]: also report the torque coefficient C_Q = 4π²·c2/(ρ·D⁵).
-    #[arg(long)]
+    /// Propeller diameter [m], to report the torque coefficient C_Q.
     pub diameter: Option<f64>,
     /// Air density [kg/m³] for C_Q.
-    #[arg(long, default_value_t = 1.225)]
     pub density: f64,
-    /// Output format.
-    #[arg(long, value_enum, default_value_t = Format::Yaml)]
-    pub format: Format,
-    /// Write a plot of measured vs predicted acceleration and the force (.svg, .png or .html).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    /// Show a progress bar on stderr (on by default for inputs over 50 MB).
-    #[arg(long)]
-    pub progress: bool,
+}
+
+impl Default for FitOptions {
+    /// The seed's bounds, no C_Q.
+    fn default() -> Self {
+        FitOptions {
+            mass_min: 1e-9,
+            mass_max: 1e3,
+            c1_max: 0.0,
+            c2_max: 1e2,
+            diameter: None,
+            density: 1.225,
+        }
+    }
+}
+
+impl FitOptions {
+    /// Checks the bounds and the propeller's geometry once, before any data is read.
+    pub fn check(&self) -> Result<(), InputError> {
+        let b = self;
+        if !(b.mass_min > 0.0 && b.mass_min <= b.mass_max && !b.mass_max.is_nan()) {
+            return Err(InputError(format!(
+                "mass bounds must satisfy 0 < mass_min ≤ mass_max (got {} and {})",
+                b.mass_min, b.mass_max
+            )));
+        }
+        for (name, v) in [("c1_max", b.c1_max), ("c2_max", b.c2_max)] {
+            if v.is_nan() || v < 0.0 {
+                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+            }
+        }
+        if let Some(d) = b.diameter {
+            if !(d > 0.0 && d.is_finite()) {
+                return Err(InputError(format!(
+                    "the propeller diameter must be a positive length in metres (got {d})"
+                )));
+            }
+        }
+        if !(b.density > 0.0 && b.density.is_finite()) {
+            return Err(InputError(format!(
+                "the air density must be positive (got {} kg/m³)",
+                b.density
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// Why a fit failed.
+#[derive(Debug, thiserror::Error)]
+pub enum FitError {
+    /// The data or the options cannot give a fit (the message names file, line or option).
+    #[error(transparent)]
+    Input(#[from] InputError),
+    /// The TSV is malformed or could not be read.
+    #[error(transparent)]
+    Tsv(#[from] TsvError),
 }
 
 /// The result of a fit, as printed.
@@ -117,7 +146,7 @@ fn is_complete(s: &Sample) -> bool {
 }
 
 /// Pass 1: the seed's window.
-pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, anyhow::Error> {
+pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitError> {
     let mut rows = 0u64;
     // Last row where each used column had a value (pandas' last_valid_index: non-NaN).
     let mut last_valid = [None::<u64>; 4];
@@ -163,10 +192,17 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, anyh
     Ok(Window { first, last, rows })
 }
 
-/// Fits a TSV file with the seed's trimming and bounds; `plot` gets a decimated copy of the data.
-pub fn fit_path(path: &Path, args: &Args) -> anyhow::Result<(FitReport, Vec<Sample>)> {
+/// Fits a TSV file with the seed's trimming and bounds. Returns the report and a decimated copy
+/// of the fitted rows (for a plot). `progress` is called now and then with (bytes read, file size)
+/// during the second pass.
+pub fn fit_path(
+    path: &Path,
+    options: &FitOptions,
+    progress: &mut dyn FnMut(u64, u64),
+) -> Result<(FitReport, Vec<Sample>), FitError> {
+    options.check()?;
     let name = path.display().to_string();
-    let open = || -> anyhow::Result<TsvReader<BufReader<File>>> {
+    let open = || -> Result<TsvReader<BufReader<File>>, FitError> {
         let f = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
         Ok(TsvReader::new(
             BufReader::with_capacity(1 << 16, f),
@@ -176,14 +212,6 @@ pub fn fit_path(path: &Path, args: &Args) -> anyhow::Result<(FitReport, Vec<Samp
     let size = std::fs::metadata(path).map(|m| m.len()).unwrap_or(0);
     let mut reader = open()?;
     let window = find_window(&mut reader)?;
-    let progress = (args.progress || size > 50 << 20).then(|| {
-        let bar = indicatif::ProgressBar::new(size);
-        bar.set_style(
-            indicatif::ProgressStyle::with_template("fit {bar:40} {bytes}/{total_bytes} {eta}")
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar
-    });
     let mut reader = open()?;
     let mut estimator = LoadEstimator::<f64>::new();
     let keep_every = ((window.last - window.first + 1) / 4000).max(1);
@@ -201,25 +229,21 @@ pub fn fit_path(path: &Path, args: &Args) -> anyhow::Result<(FitReport, Vec<Samp
         if i > window.last {
             break;
         }
-        if let Some(bar) = &progress {
-            if i % 65536 == 0 {
-                bar.set_position(reader.bytes_read());
-            }
+        if i % 65536 == 0 {
+            progress(reader.bytes_read(), size);
         }
     }
-    if let Some(bar) = progress {
-        bar.finish_and_clear();
-    }
-    let report = report_of(&estimator, args, window, &name)?;
+    progress(size, size);
+    let report = report_of(&estimator, options, window, &name)?;
     Ok((report, kept))
 }
 
 fn report_of(
     estimator: &LoadEstimator<f64>,
-    args: &Args,
+    args: &FitOptions,
     window: Window,
     name: &str,
-) -> anyhow::Result<FitReport> {
+) -> Result<FitReport, InputError> {
     let n = estimator.count() as u64;
     if n < 10 {
         return Err(InputError(format!(
@@ -227,8 +251,7 @@ fn report_of(
             window.first + 1,
             window.last + 1,
             window.rows
-        ))
-        .into());
+        )));
     }
     let bounds = LoadBounds {
         mass_min: args.mass_min,
@@ -236,16 +259,6 @@ fn report_of(
         c1_max: args.c1_max,
         c2_max: args.c2_max,
     };
-    if !(bounds.mass_min > 0.0
-        && bounds.mass_min <= bounds.mass_max
-        && bounds.c1_max >= 0.0
-        && bounds.c2_max >= 0.0)
-    {
-        return Err(InputError(format!(
-            "invalid bounds: need 0 < --mass-min ≤ --mass-max, --c1-max ≥ 0, --c2-max ≥ 0 (got {bounds:?})"
-        ))
-        .into());
-    }
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
         SolveError::NoExcitation { regressor } => InputError(format!(
@@ -367,56 +380,4 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
             },
         ],
     }
-}
-
-/// Runs `propid fit`.
-pub fn run(args: Args) -> anyhow::Result<()> {
-    let from_stdin = args.file.as_deref().is_none_or(|p| p == Path::new("-"));
-    // Standard input is spooled to a temporary file: two passes in constant memory.
-    let spool;
-    let path: &Path = if from_stdin {
-        let mut tmp = tempfile::NamedTempFile::new().context("cannot create a temporary file")?;
-        let mut stdin = std::io::stdin().lock();
-        let mut buf = vec![0u8; 1 << 16];
-        loop {
-            let n = stdin.read(&mut buf).context("reading standard input")?;
-            if n == 0 {
-                break;
-            }
-            tmp.write_all(&buf[..n])
-                .context("spooling standard input")?;
-        }
-        tmp.flush()?;
-        tmp.as_file_mut().rewind()?;
-        spool = tmp;
-        spool.path()
-    } else {
-        args.file.as_deref().unwrap_or(Path::new("-"))
-    };
-    let (report, samples) = fit_path(path, &args).map_err(|e| {
-        if from_stdin {
-            // Name standard input, not the spool file, in messages.
-            let message = format!("{e:#}").replace(&path.display().to_string(), "<stdin>");
-            if crate::exit_status_for(&e) == 2 {
-                InputError(message).into()
-            } else {
-                anyhow::anyhow!(message)
-            }
-        } else {
-            e
-        }
-    })?;
-    for w in &report.warnings {
-        eprintln!("warning: {w}");
-    }
-    if let Some(plot) = &args.plot {
-        crate::plot::write(plot, &figure(&report, &samples))?;
-        eprintln!("plot written to {}", plot.display());
-    }
-    let text = match args.format {
-        Format::Yaml => to_yaml(&report),
-        Format::Json => serde_json::to_string_pretty(&report)? + "\n",
-    };
-    std::io::stdout().write_all(text.as_bytes())?;
-    Ok(())
 }

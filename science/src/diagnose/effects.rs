@@ -21,7 +21,7 @@ use super::{
     BaseModel, CandidateScore, NamedEffect, Options, Report, ResidualAnalysis, SimulationRms,
     Traces, Unexplained, FOLDS, HOLDOUT, MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
-use crate::InputError;
+use propid_io::InputError;
 
 /// The effects propid knows how to look for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

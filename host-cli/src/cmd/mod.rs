@@ -1,0 +1,10 @@
+//! One module per subcommand: its clap arguments and the `run` that calls the libraries.
+
+pub mod demo;
+pub mod diagnose;
+pub mod drive;
+pub mod fit;
+pub mod import;
+pub mod replay;
+pub mod sim;
+pub mod sim_drive;

@@ -1,1 +1,0 @@
-//! Steady-state (plateau) analysis of the drag law (not yet implemented).
