@@ -223,6 +223,9 @@ pub fn drive(
     let _ = d
         .node
         .subscribe_message(cfg.feedback_id, DoF3rdTs::EXTENT_BYTES);
+    // The seed's registers, holding the values in use, for Yakut and friends to read.
+    let registers = crate::registers::drive_registers(Some(cfg), false);
+    crate::registers::serve(&mut d.node, &registers, &[], start);
     let ex = cfg.excitation;
     let period = Duration::from_secs_f64(cfg.setpoint_period);
     let init_end = start + Duration::from_secs_f64(ex.init_duration);

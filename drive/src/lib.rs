@@ -15,9 +15,12 @@
 #![deny(missing_docs)]
 
 pub mod drive;
+pub mod registers;
 pub mod sim_drive;
+pub mod telega;
 
 use propid_core::node::Node;
 
-/// The node type of the host tools: 8 ports, 16 sessions, 512-byte transfers, 256 queued frames.
-pub type HostNode = Node<8, 16, 512, 256>;
+/// The node type of the host tools: 16 ports, 16 sessions, 515-byte transfers (a whole
+/// `uavcan.register.Access` request), 256 queued frames, 32 registers.
+pub type HostNode = Node<16, 16, 515, 256, { registers::HOST_REGISTERS }>;

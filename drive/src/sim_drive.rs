@@ -75,6 +75,8 @@ pub struct SimDriveSummary {
     pub setpoints: u64,
     /// Feedback messages published.
     pub feedback_published: u64,
+    /// ExecuteCommand requests accepted (restart, store: the simulation has nothing to do).
+    pub commands: u64,
 }
 
 /// Runs the simulated drive until `stop` is raised or its duration ends.
@@ -83,19 +85,39 @@ pub fn run_sim_drive(
     transport: &mut dyn CanTransport,
     stop: &AtomicBool,
 ) -> Result<SimDriveSummary, String> {
+    let registers = crate::registers::sim_drive_registers(cfg, true);
+    run_sim_drive_with(cfg, &registers, transport, stop)
+}
+
+/// [`run_sim_drive`] serving Telega-like `registers` (see
+/// [`crate::registers::sim_drive_registers`]) and obeying them: `mns.pub_interval_min` sets the
+/// feedback interval and `mns.local_timestamp` whether feedback carries the drive's timestamp
+/// (0 otherwise), both at once when written over the bus.
+pub fn run_sim_drive_with(
+    cfg: &SimDriveConfig,
+    registers: &crate::registers::HostRegistry,
+    transport: &mut dyn CanTransport,
+    stop: &AtomicBool,
+) -> Result<SimDriveSummary, String> {
     let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
     let start = HostClock::now();
     let mut node = HostNode::new(
-        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
+        NodeConfig::new(cfg.node_id, "org.zubax.telega.sim", mtu),
         start,
     );
+    let commands = [
+        propid_core::dsdl::ExecuteCommandRequest::COMMAND_RESTART,
+        propid_core::dsdl::ExecuteCommandRequest::COMMAND_STORE_PERSISTENT_STATES,
+    ];
+    crate::registers::serve(&mut node, registers, &commands, start);
+    let mut obeyed = crate::registers::SimSettings::read(node.registers(), cfg.interval);
     let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
     if let Some(id) = cfg.readiness_id {
         let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
     }
     let mut stand = Stand::new(cfg.stand, cfg.seed);
     let mut summary = SimDriveSummary::default();
-    let interval = Duration::from_secs_f64(cfg.interval);
+    let mut interval = Duration::from_secs_f64(obeyed.interval);
     let mut next_feedback = start;
     let mut last_setpoint_at: Option<Instant> = None;
     let mut setpoint = 0.0f64;
@@ -116,7 +138,9 @@ pub fn run_sim_drive(
             stand.advance_to(t);
             let s = stand.measure();
             let mut fb = DoF3rdTs::default();
-            fb.timestamp.microsecond = (t * 1e6) as u64;
+            if obeyed.local_timestamp {
+                fb.timestamp.microsecond = (t * 1e6) as u64;
+            }
             fb.value.kinematics.base.position = s.position as f32;
             fb.value.kinematics.base.velocity = s.velocity as f32;
             fb.value.kinematics.acceleration = s.acceleration as f32;
@@ -131,6 +155,14 @@ pub fn run_sim_drive(
             if next_feedback < now {
                 next_feedback = now + interval;
             }
+        }
+        if node.take_register_change().is_some() {
+            obeyed = crate::registers::SimSettings::read(node.registers(), obeyed.interval);
+            interval = Duration::from_secs_f64(obeyed.interval);
+            next_feedback = next_feedback.min(now + interval);
+        }
+        while node.take_command().is_some() {
+            summary.commands += 1;
         }
         while let Some(f) = node.poll_transmit(now) {
             transport.send(&f).map_err(|e| e.to_string())?;

@@ -27,6 +27,8 @@ enum Command {
     Import(propid::cmd::import::Command),
     /// Run a simulated Telega as a Cyphal node on a CAN interface.
     SimDrive(propid::cmd::sim_drive::Args),
+    /// Find Telega drives on the bus, check the seed's prerequisites, set and store registers.
+    Telega(propid::cmd::telega::Args),
     /// Reassemble a candump log and write the feedback subject as TSV.
     Replay(propid::cmd::replay::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
@@ -43,6 +45,7 @@ fn main() -> ExitCode {
         Command::Import(c) => propid::cmd::import::run(c),
         Command::SimDrive(a) => propid::cmd::sim_drive::run(a),
         Command::Replay(a) => propid::cmd::replay::run(a),
+        Command::Telega(a) => propid::cmd::telega::run(a),
         Command::Demo(a) => propid::cmd::demo::run(a),
     };
     match result {

@@ -8,3 +8,4 @@ pub mod import;
 pub mod replay;
 pub mod sim;
 pub mod sim_drive;
+pub mod telega;

@@ -5,7 +5,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use propid_core::dsdl::Readiness;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
+use propid_drive::registers;
+use propid_drive::sim_drive::{run_sim_drive_with, SimDriveConfig};
 
 use crate::cmd::sim::StandArgs;
 use crate::InputError;
@@ -37,6 +38,11 @@ pub struct Args {
     /// The simulated stand.
     #[command(flatten)]
     pub stand: StandArgs,
+    /// Set one of its Telega-like registers at start, NAME=VALUE (repeatable), e.g.
+    /// `mns.pub_interval_min=0.05` or `mns.local_timestamp=false` (Telega's factory settings).
+    /// Environment variables named after the registers (MNS__PUB_INTERVAL_MIN, …) apply too.
+    #[arg(long = "register", value_name = "NAME=VALUE")]
+    pub registers: Vec<String>,
 }
 
 fn readiness_name(v: u8) -> &'static str {
@@ -68,6 +74,29 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand: args.stand.config()?,
         seed: args.stand.seed,
     };
+    let mut cfg = cfg;
+    let mut r = registers::sim_drive_registers(&cfg, true);
+    // Its own node-ID and ports come from the flags (and their variables): only the others here.
+    let env = std::env::vars().filter(|(k, _)| k.starts_with("MNS__"));
+    registers::apply_environment(&mut r, env)?;
+    for a in &args.registers {
+        let (name, value) = a
+            .split_once('=')
+            .ok_or_else(|| InputError(format!("--register `{a}`: expected NAME=VALUE")))?;
+        let origin = format!("--register {name}");
+        registers::set_text(
+            &mut r,
+            name.trim(),
+            registers::normalize_bool(value),
+            &origin,
+        )?;
+    }
+    let first = |n: &str| r.get(n).and_then(|x| x.value.float_at(0));
+    let port = |n: &str| first(n).filter(|v| *v <= 8191.0).map(|v| v as u16);
+    cfg.feedback_id = port("uavcan.pub.dynamics.id").unwrap_or(cfg.feedback_id);
+    cfg.setpoint_id = port("uavcan.sub.setpoint_r_torq.id").unwrap_or(cfg.setpoint_id);
+    cfg.readiness_id = port("uavcan.sub.readiness.id");
+    cfg.interval = registers::SimSettings::read(&r, cfg.interval).interval;
     let mut transport = args.bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     crate::signals::install(&stop)?;
@@ -77,7 +106,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         transport.name(),
         cfg.feedback_id
     );
-    let summary = run_sim_drive(&cfg, transport.as_mut(), &stop).map_err(anyhow::Error::msg)?;
+    let summary =
+        run_sim_drive_with(&cfg, &r, transport.as_mut(), &stop).map_err(anyhow::Error::msg)?;
     eprintln!(
         "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {:?}",
         summary.setpoints,
