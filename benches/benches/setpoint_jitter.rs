@@ -28,6 +28,9 @@ impl CanTransport for Recorder {
         }
         self.inner.send(frame)
     }
+    fn flush(&mut self, deadline: std::time::Instant) -> Result<bool, TransportError> {
+        self.inner.flush(deadline)
+    }
     fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError> {
         self.inner.receive(timeout)
     }
@@ -36,6 +39,9 @@ impl CanTransport for Recorder {
     }
     fn name(&self) -> String {
         "recorder".into()
+    }
+    fn health(&self) -> propid_transport::Health {
+        self.inner.health()
     }
 }
 

@@ -74,7 +74,15 @@ impl<'a> Client<'a> {
         loop {
             let now = HostClock::now();
             while let Some(f) = self.node.poll_transmit(now) {
-                self.transport.send(&f).map_err(|e| e.to_string())?;
+                // Configuration traffic may wait for a congested link, briefly.
+                let deadline = std::time::Instant::now() + Duration::from_millis(500);
+                if !self
+                    .transport
+                    .send_by(&f, deadline)
+                    .map_err(|e| e.to_string())?
+                {
+                    return Err("the bus did not take a frame within 0.5 s".into());
+                }
             }
             if now >= until {
                 return Ok(None);

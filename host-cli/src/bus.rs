@@ -56,8 +56,21 @@ pub fn open(iface: &str, bitrate: &str, mtu: usize) -> anyhow::Result<Box<dyn Ca
                 arbitration,
             )?)
         }
-        IfaceSpec::SocketCan { name } => {
-            Box::new(propid_socketcan::SocketCanTransport::open(&name, mtu)?)
-        }
+        IfaceSpec::SocketCan { name } => open_socketcan(iface, &name, mtu)?,
     })
+}
+
+#[cfg(target_os = "linux")]
+fn open_socketcan(_iface: &str, name: &str, mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
+    Ok(Box::new(propid_socketcan::SocketCanTransport::open(
+        name, mtu,
+    )?))
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_socketcan(iface: &str, _name: &str, _mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
+    Err(InputError(format!(
+        "{iface}: socketcan is only available on Linux; use an SLCAN adapter (slcan:DEVICE[@BAUD])"
+    ))
+    .into())
 }

@@ -16,6 +16,8 @@
 
 pub mod bus;
 pub mod cmd;
+pub mod html;
+pub mod live;
 pub mod plot;
 pub mod signals;
 

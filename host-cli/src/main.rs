@@ -31,6 +31,10 @@ enum Command {
     Telega(propid::cmd::telega::Args),
     /// Reassemble a candump log and write the feedback subject as TSV.
     Replay(propid::cmd::replay::Args),
+    /// Design the excitation from a prior: the most precise J and c2 within the setpoint range.
+    Plan(propid::cmd::plan::Args),
+    /// Write one self-contained HTML report of a recording: fit, diagnosis, interactive plots.
+    Report(propid::cmd::report::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
     Demo(propid::cmd::demo::Args),
 }
@@ -46,6 +50,8 @@ fn main() -> ExitCode {
         Command::SimDrive(a) => propid::cmd::sim_drive::run(a),
         Command::Replay(a) => propid::cmd::replay::run(a),
         Command::Telega(a) => propid::cmd::telega::run(a),
+        Command::Plan(a) => propid::cmd::plan::run(a),
+        Command::Report(a) => propid::cmd::report::run(a),
         Command::Demo(a) => propid::cmd::demo::run(a),
     };
     match result {

@@ -1,4 +1,4 @@
-//! Plots to SVG, PNG or a self-contained HTML page, chosen by the file extension.
+//! Plots to SVG, PNG or a self-contained interactive HTML page, chosen by the file extension.
 //!
 //! A [`Figure`] is a stack of [`Panel`]s with one x quantity (usually time), each panel scaled to
 //! its own data; each panel holds [`Series`]. Callers describe what to show; this module decides
@@ -37,15 +37,9 @@ pub fn write(path: &Path, figure: &Figure) -> anyhow::Result<()> {
             draw(backend.into_drawing_area(), figure)?;
         }
         "html" => {
-            let mut svg = String::new();
-            {
-                let backend = SVGBackend::with_string(&mut svg, (WIDTH, height));
-                draw(backend.into_drawing_area(), figure)?;
-            }
-            let page = format!(
-                "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>{t}</title></head>\n\
-                 <body style=\"font-family:sans-serif\"><h1>{t}</h1>\n{svg}\n</body></html>\n",
-                t = html_escape(&figure.title)
+            let page = crate::html::page(
+                &figure.title,
+                &[crate::html::figure_section(figure, "figure")],
             );
             std::fs::write(path, page)
                 .with_context(|| format!("cannot write {}", path.display()))?;
@@ -58,13 +52,6 @@ pub fn write(path: &Path, figure: &Figure) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn html_escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-}
-
-/// The finite range of some values, widened a little (and made non-empty).
 fn range_of<'a>(values: impl Iterator<Item = &'a f64>) -> (f64, f64) {
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for &v in values {
@@ -196,7 +183,8 @@ mod tests {
             assert!(bytes.len() > 1000, "{ext} too small");
             if ext != "png" {
                 let text = String::from_utf8(bytes).unwrap();
-                assert!(text.contains("<svg") && text.contains("sin"), "{ext}");
+                let drawn = if ext == "svg" { "<svg" } else { "uPlot" };
+                assert!(text.contains(drawn) && text.contains("sin"), "{ext}");
             } else {
                 assert_eq!(&bytes[1..4], b"PNG");
             }

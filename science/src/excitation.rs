@@ -7,7 +7,7 @@
 use propid_io::InputError;
 
 /// The shape of the setpoint after the init phase.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Pattern {
     /// The seed's sinusoid between lo and hi.
@@ -16,11 +16,27 @@ pub enum Pattern {
     Steps,
     /// A sine sweep between lo and hi from 1/period to 10/period.
     Chirp,
+    /// A square wave: hi and lo alternately, each held half a period (bang-bang: the largest
+    /// accelerations the range allows).
+    Square,
+    /// A pseudo-random binary sequence: lo or hi, a new draw every half period (fixed sequence,
+    /// so a run is repeatable); broadband, it separates lags from friction.
+    Prbs,
+    /// Eight sines at 1/period … 8/period with Schroeder phases (low crest factor), scaled to
+    /// span lo..hi.
+    Multisine,
 }
 
 impl Pattern {
     /// Every pattern, in the order the help lists them.
-    pub const ALL: [Pattern; 3] = [Pattern::Sine, Pattern::Steps, Pattern::Chirp];
+    pub const ALL: [Pattern; 6] = [
+        Pattern::Sine,
+        Pattern::Steps,
+        Pattern::Chirp,
+        Pattern::Square,
+        Pattern::Prbs,
+        Pattern::Multisine,
+    ];
 
     /// The pattern's name as the command line and the files spell it.
     pub fn name(self) -> &'static str {
@@ -28,6 +44,9 @@ impl Pattern {
             Pattern::Sine => "sine",
             Pattern::Steps => "steps",
             Pattern::Chirp => "chirp",
+            Pattern::Square => "square",
+            Pattern::Prbs => "prbs",
+            Pattern::Multisine => "multisine",
         }
     }
 }
@@ -56,7 +75,7 @@ impl core::str::FromStr for Pattern {
 }
 
 /// The excitation the driver applies (the same for `drive`, `sim` and `sim-drive`).
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Excitation {
     /// Low setpoint (ratiometric, −1..1).
     pub lo: f64,
@@ -91,6 +110,23 @@ impl Excitation {
                 let phase = std::f64::consts::TAU * (f0 * t + (f1 - f0) * t * t / (2.0 * d));
                 lerp(phase.sin())
             }
+            Pattern::Square => {
+                let half = (t / (self.period / 2.0)).floor();
+                if half.rem_euclid(2.0) < 1.0 {
+                    hi
+                } else {
+                    lo
+                }
+            }
+            Pattern::Prbs => {
+                let k = (t / (self.period / 2.0)).floor().max(0.0) as u64;
+                if splitmix64(k) & 1 == 1 {
+                    hi
+                } else {
+                    lo
+                }
+            }
+            Pattern::Multisine => lerp(multisine(t / self.period)),
         }
     }
 
@@ -131,4 +167,39 @@ impl Excitation {
         }
         Ok(())
     }
+}
+
+/// SplitMix64: a fixed, well-mixed pseudo-random bit per index (the PRBS pattern's draws).
+fn splitmix64(k: u64) -> u64 {
+    let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Harmonics of the multisine.
+const MULTISINE_HARMONICS: usize = 8;
+
+/// The multisine at `x` periods, before scaling: Σ sin(2π k x + φ_k), Schroeder phases.
+fn multisine_raw(x: f64) -> f64 {
+    let n = MULTISINE_HARMONICS as f64;
+    (1..=MULTISINE_HARMONICS)
+        .map(|k| {
+            let k = k as f64;
+            let phase = -std::f64::consts::PI * k * (k - 1.0) / n;
+            (std::f64::consts::TAU * k * x + phase).sin()
+        })
+        .sum()
+}
+
+/// The multisine scaled to [−1, 1] (its peak over a period, found once on a fine grid, maps to 1).
+fn multisine(x: f64) -> f64 {
+    static PEAK: std::sync::OnceLock<f64> = std::sync::OnceLock::new();
+    let peak = *PEAK.get_or_init(|| {
+        (0..20_000)
+            .map(|i| multisine_raw(i as f64 / 20_000.0).abs())
+            .fold(0.0, f64::max)
+            * 1.000_001
+    });
+    (multisine_raw(x) / peak).clamp(-1.0, 1.0)
 }

@@ -28,6 +28,7 @@ pub mod diagnose;
 pub mod excitation;
 pub mod figure;
 pub mod fit;
+pub mod plan;
 pub mod stand;
 
 pub use propid_io::InputError;

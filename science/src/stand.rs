@@ -351,7 +351,7 @@ mod tests {
         let a = simulate(StandConfig::default(), &excitation(1.0), 7);
         let b = simulate(StandConfig::default(), &excitation(1.0), 7);
         assert_eq!(a, b);
-        for pattern in [Pattern::Sine, Pattern::Steps, Pattern::Chirp] {
+        for pattern in Pattern::ALL {
             let e = Excitation {
                 pattern,
                 ..excitation(30.0)

@@ -234,7 +234,7 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
         if theta.iter().any(|t| !t.is_finite()) {
             return Err(SolveError::Singular);
         }
-        Ok(self.solution_at(theta, &d, &s, 0))
+        Ok(self.solution_at::<0>(theta, &d, &s, &[], 0))
     }
 
     /// Least squares subject to `M` linear inequalities g_kᵀθ ≤ h_k, exactly (see the module
@@ -291,19 +291,27 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             }
         }
         let (theta, _, set) = best.ok_or(SolveError::Infeasible)?;
-        Ok(self.solution_at(theta, &d, &s, set))
+        Ok(self.solution_at(theta, &d, &s, &gs, set))
     }
 
-    fn solution_at(
+    /// The solution's statistics. `gs` are the constraint rows in scaled variables and `active`
+    /// the set of those the solution sits on: an active constraint removes a direction from the
+    /// parameter space, so the covariance is that of the restricted problem,
+    /// S⁻¹ − S⁻¹Gᵀ(G S⁻¹ Gᵀ)⁻¹G S⁻¹ (G: the active rows), zero across the bound. (Using the
+    /// unconstrained S⁻¹ instead overstates the error of every parameter correlated with the
+    /// bounded one: the seed's c1 = 0 bound and c2 are nearly collinear on a propeller.)
+    fn solution_at<const M: usize>(
         &self,
         theta: [T; N],
         d: &[T; N],
         s: &SMatrix<T, N, N>,
+        gs: &[[T; N]; M],
         active: u32,
     ) -> Solution<T, N> {
         let n = self.weight.sum;
         let ss = self.residual_sum_of_squares(&theta);
-        let dof = n - T::from_usize(N).unwrap_or(T::zero());
+        let free = N - (active.count_ones() as usize).min(N);
+        let dof = n - T::from_usize(free).unwrap_or(T::zero());
         let sigma2 = if dof > T::zero() { ss / dof } else { T::zero() };
         let mut covariance = [[T::zero(); N]; N];
         let mut stderr = [T::zero(); N];
@@ -315,9 +323,10 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
         };
         let mut condition_number = T::max_value().unwrap_or(T::one());
         if let Some(inv) = s.try_inverse() {
+            let restricted = restrict(&inv, gs, active).unwrap_or(inv);
             for i in 0..N {
                 for j in 0..N {
-                    covariance[i][j] = sigma2 * inv[(i, j)] * d[i] * d[j];
+                    covariance[i][j] = sigma2 * restricted[(i, j)] * d[i] * d[j];
                 }
                 stderr[i] = covariance[i][i].max(T::zero()).sqrt();
             }
@@ -337,6 +346,35 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             active_constraints: active,
         }
     }
+}
+
+/// P − P Gᵀ (G P Gᵀ)⁻¹ G P for the rows of `gs` in `active` (none: `None`). Unused rows of the
+/// fixed-size G are zero, with a unit diagonal in G P Gᵀ so that it stays invertible.
+fn restrict<T: RealField + Copy, const N: usize, const M: usize>(
+    p: &SMatrix<T, N, N>,
+    gs: &[[T; N]; M],
+    active: u32,
+) -> Option<SMatrix<T, N, N>> {
+    let mut g = SMatrix::<T, N, N>::zeros();
+    let mut used = 0;
+    for (k, row) in gs.iter().enumerate() {
+        if active & (1 << k) != 0 && used < N {
+            for i in 0..N {
+                g[(used, i)] = row[i];
+            }
+            used += 1;
+        }
+    }
+    if used == 0 {
+        return None;
+    }
+    let pg = p * g.transpose();
+    let mut m = g * pg;
+    for r in used..N {
+        m[(r, r)] = T::one();
+    }
+    let minv = m.try_inverse()?;
+    Some(p - pg * minv * pg.transpose())
 }
 
 /// Solves the equality-constrained problem min ½zᵀSz − bᵀz s.t. g_kᵀz = h_k for k in `set`,

@@ -1,7 +1,7 @@
 //! `propid demo`: the whole pipeline on a simulated stand, no hardware.
 //!
 //! ```text
-//!  pseudo-terminal pair (a real pty; the bytes are real SLCAN)
+//!  pseudo-terminal pair (a real pty; the bytes are real SLCAN; an in-memory bus on Windows)
 //!   ├─ thread: sim-drive (Stand with a hidden effect) ─ SlcanTransport ─┐
 //!   └─ drive (init, pattern, STANDBY) ───────────────── SlcanTransport ─┘
 //!  ─► run.tsv ─► fit (fit.yaml, fit.svg) ─► diagnose (diagnose.txt, diagnose.json, diagnose.svg)
@@ -15,8 +15,7 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use propid_core::dsdl::Readiness;
-use propid_slcan::SlcanTransport;
-use serialport::{SerialPort, TTYPort};
+use propid_transport::CanTransport;
 
 use propid_drive::drive::{drive, DriveConfig, StopReason};
 use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
@@ -66,8 +65,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         pattern: args.pattern,
     };
     excitation.validate()?;
-    let (drive_end, telega_end) = TTYPort::pair().context("cannot open a pseudo-terminal pair")?;
-    let pty = drive_end.name().unwrap_or_else(|| "pty".into());
+    let (mut transport, mut telega_end, pty) = link()?;
     eprintln!(
         "demo: simulated Telega (J = {:.2e} kg·m², c2 = {:.2e}, hidden torque lag {} ms) and the driver talk SLCAN over {pty}",
         stand.inertia,
@@ -78,10 +76,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let stop_sim = Arc::new(AtomicBool::new(false));
     let telega = {
         let stop = Arc::clone(&stop_sim);
-        std::thread::spawn(move || {
-            let mut t = SlcanTransport::from_port(Box::new(telega_end), "pty-telega");
-            run_sim_drive(&sim_cfg, &mut t, &stop)
-        })
+        std::thread::spawn(move || run_sim_drive(&sim_cfg, telega_end.as_mut(), &stop))
     };
     let cfg = DriveConfig {
         fit: true,
@@ -90,9 +85,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let tsv = args.out.join("run.tsv");
     let mut file =
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
-    let mut transport = SlcanTransport::from_port(Box::new(drive_end), &pty);
     let never = AtomicBool::new(false);
-    let outcome = drive(&cfg, &mut transport, &mut file, &never, &mut |e| {
+    let outcome = drive(&cfg, transport.as_mut(), &mut file, &never, &mut |e| {
         crate::cmd::drive::print_event(e, &excitation, true)
     });
     // Give the last STANDBY frames time to arrive before the simulated drive stops.
@@ -154,19 +148,57 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     md += &text;
     md += "```\n\n![diagnosis](diagnose.svg)\n";
     std::fs::write(args.out.join("report.md"), &md)?;
+    let reproduce = [format!(
+        "propid demo --out {} --duration {} --init-duration {} --pattern {} --torque-lag {} --seed {}",
+        args.out.display(),
+        args.duration,
+        args.init_duration,
+        args.pattern,
+        args.torque_lag,
+        args.seed
+    )];
+    let page = crate::cmd::report::build(&tsv, &fit_options, &reproduce)?;
+    let html_path = args.out.join("report.html");
+    std::fs::write(&html_path, page)
+        .with_context(|| format!("cannot write {}", html_path.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{text}")?;
     writeln!(
         out,
-        "demo: fit J = {:.4e} kg·m², c2 = {:.4e} (truth {:.4e}, {:.4e}); report in {}",
+        "demo: fit J = {:.4e} kg·m², c2 = {:.4e} (truth {:.4e}, {:.4e}); report in {} (open {} in a browser)",
         fit.mass,
         fit.c2,
         stand.inertia,
         stand.c2,
-        args.out.join("report.md").display()
+        args.out.join("report.md").display(),
+        html_path.display()
     )?;
     if !standby_last {
         anyhow::bail!("the simulated drive did not see STANDBY last");
     }
     Ok(())
+}
+
+/// The driver's end, the simulated Telega's end and a name for the link.
+type Link = (Box<dyn CanTransport>, Box<dyn CanTransport>, String);
+
+/// SLCAN over a real pseudo-terminal pair where the OS has them.
+#[cfg(unix)]
+fn link() -> anyhow::Result<Link> {
+    use propid_slcan::SlcanTransport;
+    use serialport::{SerialPort, TTYPort};
+    let (drive_end, telega_end) = TTYPort::pair().context("cannot open a pseudo-terminal pair")?;
+    let pty = drive_end.name().unwrap_or_else(|| "pty".into());
+    Ok((
+        Box::new(SlcanTransport::from_tty(drive_end, &pty)?),
+        Box::new(SlcanTransport::from_tty(telega_end, "pty-telega")?),
+        pty,
+    ))
+}
+
+/// Windows has no pseudo-terminals: the demo's two ends meet on an in-memory Classic CAN bus.
+#[cfg(not(unix))]
+fn link() -> anyhow::Result<Link> {
+    let (a, b) = propid_transport::MemoryBus::pair(8);
+    Ok((Box::new(a), Box::new(b), "an in-memory bus".into()))
 }

@@ -153,6 +153,21 @@ impl Args {
     }
 }
 
+/// Parses the seed's `setpoint_rat_lo_hi` register: two numbers, space or comma separated.
+pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
+    let bad = || InputError(format!("setpoint_rat_lo_hi `{text}` is not two numbers"));
+    let values: Vec<f64> = text
+        .split(|c: char| c.is_whitespace() || c == ',')
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad())?;
+    match values[..] {
+        [lo, hi] => Ok((lo, hi)),
+        _ => Err(bad()),
+    }
+}
+
 /// Prints a drive's events on stderr (`progress` off: only the start of the pattern).
 pub fn print_event(event: DriveEvent, excitation: &Excitation, progress: bool) {
     match event {

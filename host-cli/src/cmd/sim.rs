@@ -98,9 +98,12 @@ pub struct Args {
     /// Init phase at the high setpoint [s].
     #[arg(long, default_value_t = 5.0)]
     pub init_duration: f64,
-    /// Pattern after the init phase.
+    /// Pattern after the init phase: sine, steps, chirp, square, prbs, multisine.
     #[arg(long, default_value_t = Pattern::Sine)]
     pub pattern: Pattern,
+    /// Play a pattern file from `propid plan` instead (its range, period and durations).
+    #[arg(long, conflicts_with_all = ["pattern", "lo", "hi", "period", "duration", "init_duration"])]
+    pub pattern_file: Option<PathBuf>,
 }
 
 impl StandArgs {
@@ -136,23 +139,34 @@ impl StandArgs {
 }
 
 impl Args {
-    /// The excitation these arguments describe.
-    pub fn excitation(&self) -> Excitation {
-        Excitation {
+    /// The excitation these arguments describe (a pattern file's, when given).
+    pub fn excitation(&self) -> Result<Excitation, InputError> {
+        if let Some(path) = &self.pattern_file {
+            return read_pattern_file(path);
+        }
+        Ok(Excitation {
             lo: self.lo,
             hi: self.hi,
             period: self.period,
             duration: self.duration,
             init_duration: self.init_duration,
             pattern: self.pattern,
-        }
+        })
     }
+}
+
+/// Reads a pattern file written by `propid plan`.
+pub fn read_pattern_file(path: &std::path::Path) -> Result<Excitation, InputError> {
+    let name = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError(format!("{name}: cannot read: {e}")))?;
+    propid_science::plan::excitation_from_file(&text, &name)
 }
 
 /// Runs `propid sim`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let config = args.stand.config()?;
-    let excitation = args.excitation();
+    let excitation = args.excitation()?;
     excitation.validate()?;
     let out: Box<dyn Write> = match &args.output {
         Some(p) => Box::new(std::io::BufWriter::new(

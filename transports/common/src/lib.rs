@@ -7,11 +7,25 @@
 //!  "slcan:/dev/ttyACM0@115200" ─┐
 //!  "socketcan:can0"            ─┴─► IfaceSpec::parse ─► (host-cli's bus::open) ─► Box<dyn CanTransport>
 //!  CanTransport::receive(timeout) ─► propid_core::can::Frame (timestamped on the HostClock)
-//!  CanTransport::send(&Frame)
+//!  CanTransport::send(&Frame)     ─► Ok (accepted whole) | Err(WouldBlock) (not taken, nothing written)
+//!  CanTransport::flush(deadline)  ─► did every accepted byte leave?   (the stop sequence)
+//!  CanTransport::health()         ─► counters and the adapter's bus state
 //! ```
 //! Frames are `propid_core::can::Frame`, which implements `embedded_can::Frame`. Every received
 //! frame carries a timestamp on the [`HostClock`] — one monotonic clock per process, so the
 //! drive loop, the transports and the core all count microseconds from the same epoch.
+//!
+//! ## Sending never blocks the control loop
+//! A link can be congested: a slow reader on the other end of a serial port, a busy bus, a full
+//! kernel queue. [`CanTransport::send`] never waits for it. It either accepts the frame whole —
+//! it will reach the link in full, though its last bytes may still sit in the transport until a
+//! later call (SLCAN keeps the tail of a partly written line and completes it before anything
+//! else, so the wire never carries half a frame followed by another) — or refuses it with
+//! [`TransportError::WouldBlock`], having written nothing of it. A refusal is counted in
+//! [`Health::would_block`]; the caller decides whether to retry, supersede or drop the frame.
+//! [`CanTransport::flush`] pushes out what was accepted, retrying until a deadline, and says
+//! whether everything left; [`CanTransport::send_by`] does both for one frame, for the stop
+//! sequence (STANDBY and a zero setpoint) that must go out within a bound.
 #![deny(missing_docs)]
 
 use std::sync::mpsc;
@@ -33,9 +47,22 @@ pub enum TransportError {
         #[source]
         source: std::io::Error,
     },
-    /// The device went away (adapter unplugged, peer closed).
-    #[error("{0}: the interface is gone (adapter unplugged or peer closed)")]
+    /// The device went away (adapter unplugged, peer closed): the transport is unusable.
+    #[error("{0}: device disappeared (adapter unplugged or the other end closed)")]
     Closed(String),
+    /// The link cannot take a frame now (congestion); nothing of the frame was written. Not a
+    /// failure: counted in [`Health::would_block`], retry later or drop the frame.
+    #[error("the link cannot take a frame now (congested); nothing was written")]
+    WouldBlock,
+    /// The adapter refused a command it must accept (SLCAN BELL), e.g. the bit rate or the
+    /// open command.
+    #[error("{device}: the adapter refused the command `{command}`")]
+    Refused {
+        /// Interface name.
+        device: String,
+        /// The refused command, without its line end.
+        command: String,
+    },
     /// The request cannot be served by this transport (e.g. CAN FD over SLCAN).
     #[error("{0}")]
     Unsupported(String),
@@ -44,17 +71,107 @@ pub enum TransportError {
     BadSpec(String),
 }
 
-/// A CAN bus as the host tools see it.
+impl TransportError {
+    /// Whether this is the congestion outcome of a send, not a failure.
+    pub fn is_would_block(&self) -> bool {
+        matches!(self, TransportError::WouldBlock)
+    }
+}
+
+/// The CAN controller's error state, as the adapter or kernel last reported it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, PartialOrd, Ord)]
+pub enum BusState {
+    /// No report yet (or the transport cannot tell).
+    #[default]
+    Unknown,
+    /// Error-active: normal operation.
+    Active,
+    /// An error counter passed the warning level (96).
+    Warning,
+    /// An error counter passed 127: the controller may no longer flag errors actively.
+    Passive,
+    /// The transmit error counter passed 255: the controller is off the bus and sends nothing.
+    BusOff,
+}
+
+/// What a transport has done and seen since it was opened. Counters only grow.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Health {
+    /// Frames accepted by [`CanTransport::send`].
+    pub frames_sent: u64,
+    /// Frames delivered by [`CanTransport::receive`].
+    pub frames_received: u64,
+    /// Sends refused with [`TransportError::WouldBlock`].
+    pub would_block: u64,
+    /// Lines the adapter refused (SLCAN BELL).
+    pub refused: u64,
+    /// The last line the adapter refused (`T1060642A2…`, `S8`), as far as replies can be matched
+    /// to requests.
+    pub last_refused: Option<String>,
+    /// Input skipped because it could not be understood.
+    pub garbage: u64,
+    /// The controller's state from the last status report.
+    pub bus_state: BusState,
+    /// The raw status flags of the last report, where the adapter gives flags (SLCAN `F`).
+    pub status_flags: Option<u8>,
+    /// Status reports received.
+    pub status_reports: u64,
+    /// Reports of frames lost in the adapter or the kernel (receive overrun).
+    pub overruns: u64,
+    /// Times the adapter's timestamps disagreed with the host clock and were re-anchored.
+    pub timestamp_resyncs: u64,
+}
+
+/// A CAN bus as the host tools see it. See the crate documentation for the sending contract.
 pub trait CanTransport: Send {
-    /// Sends one frame (blocking until the driver took it).
+    /// Offers one frame without waiting: `Ok(())` when it was accepted whole (it will reach the
+    /// link in full; its tail may leave during a later call), `Err(WouldBlock)` when the link
+    /// cannot take it now (nothing of it was written; counted in [`Health::would_block`]).
     fn send(&mut self, frame: &Frame) -> Result<(), TransportError>;
-    /// Waits up to `timeout` for a frame; `Ok(None)` on timeout.
+    /// Pushes out the accepted bytes still held in the transport, retrying until `deadline`:
+    /// `Ok(true)` when nothing is left, `Ok(false)` when the deadline passed first.
+    fn flush(&mut self, deadline: std::time::Instant) -> Result<bool, TransportError>;
+    /// Waits up to `timeout` for a frame; `Ok(None)` on timeout. Also moves pending output along,
+    /// so a caller that only receives still completes an accepted frame.
     fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError>;
     /// Largest data length per frame (8 or 64).
     fn mtu(&self) -> usize;
     /// A short description for logs (`slcan:/dev/ttyACM0`).
     fn name(&self) -> String;
+    /// Counters and the bus state so far.
+    fn health(&self) -> Health;
+
+    /// Sends `frame`, retrying while the link is congested, then flushes, all before
+    /// `deadline`: `Ok(true)` when the frame left completely, `Ok(false)` when the deadline came
+    /// first (the frame was then either never accepted or is still partly queued). For the stop
+    /// sequence, which must not wait forever and must know whether it got through.
+    fn send_by(
+        &mut self,
+        frame: &Frame,
+        deadline: std::time::Instant,
+    ) -> Result<bool, TransportError> {
+        loop {
+            match self.send(frame) {
+                Ok(()) => return self.flush(deadline),
+                Err(TransportError::WouldBlock) => {
+                    let now = std::time::Instant::now();
+                    if now >= deadline {
+                        return Ok(false);
+                    }
+                    // Let the link drain what it holds, then offer again.
+                    let step = (deadline - now).min(RETRY_STEP);
+                    if self.flush(now + step)? {
+                        std::thread::sleep(step);
+                    }
+                }
+                Err(e) => return Err(e),
+            }
+        }
+    }
 }
+
+/// How long [`CanTransport::send_by`] lets a congested link drain between offers.
+const RETRY_STEP: Duration = Duration::from_micros(200);
 
 /// The process's monotonic clock, as `propid_core::time::Instant` (µs since the first use).
 pub struct HostClock;
@@ -149,30 +266,53 @@ pub fn parse_bitrate(text: &str) -> Result<(u32, u32), TransportError> {
 }
 
 /// One end of an in-memory bus (tests, and a loopback for tools): frames sent on one end are
-/// received on the other, timestamped on arrival.
+/// received on the other, timestamped on arrival. With a capacity, each direction holds at most
+/// that many frames in flight, and a send beyond it is refused with `WouldBlock` until the other
+/// end receives: congestion that tests can create deterministically.
 pub struct MemoryBus {
-    tx: mpsc::Sender<Frame>,
+    tx: MemorySender,
     rx: mpsc::Receiver<Frame>,
     mtu: usize,
+    health: Health,
+}
+
+enum MemorySender {
+    Unbounded(mpsc::Sender<Frame>),
+    Bounded(mpsc::SyncSender<Frame>),
 }
 
 impl MemoryBus {
-    /// Two connected ends.
+    /// Two connected ends with no limit on frames in flight.
     pub fn pair(mtu: usize) -> (MemoryBus, MemoryBus) {
         let (a_tx, b_rx) = mpsc::channel();
         let (b_tx, a_rx) = mpsc::channel();
         (
-            MemoryBus {
-                tx: a_tx,
-                rx: a_rx,
-                mtu,
-            },
-            MemoryBus {
-                tx: b_tx,
-                rx: b_rx,
-                mtu,
-            },
+            Self::end(MemorySender::Unbounded(a_tx), a_rx, mtu),
+            Self::end(MemorySender::Unbounded(b_tx), b_rx, mtu),
         )
+    }
+
+    /// Two connected ends, each direction holding at most `capacity` frames (at least 1) that
+    /// the other end has not received yet.
+    pub fn pair_with_capacity(mtu: usize, capacity: usize) -> (MemoryBus, MemoryBus) {
+        let (a_tx, b_rx) = mpsc::sync_channel(capacity.max(1));
+        let (b_tx, a_rx) = mpsc::sync_channel(capacity.max(1));
+        (
+            Self::end(MemorySender::Bounded(a_tx), a_rx, mtu),
+            Self::end(MemorySender::Bounded(b_tx), b_rx, mtu),
+        )
+    }
+
+    fn end(tx: MemorySender, rx: mpsc::Receiver<Frame>, mtu: usize) -> MemoryBus {
+        MemoryBus {
+            tx,
+            rx,
+            mtu,
+            health: Health {
+                bus_state: BusState::Active,
+                ..Health::default()
+            },
+        }
     }
 }
 
@@ -185,15 +325,32 @@ impl CanTransport for MemoryBus {
                 self.mtu
             )));
         }
-        self.tx
-            .send(frame.clone())
-            .map_err(|_| TransportError::Closed("memory bus".into()))
+        let closed = || TransportError::Closed("memory bus".into());
+        match &self.tx {
+            MemorySender::Unbounded(tx) => tx.send(frame.clone()).map_err(|_| closed())?,
+            MemorySender::Bounded(tx) => match tx.try_send(frame.clone()) {
+                Ok(()) => {}
+                Err(mpsc::TrySendError::Full(_)) => {
+                    self.health.would_block += 1;
+                    return Err(TransportError::WouldBlock);
+                }
+                Err(mpsc::TrySendError::Disconnected(_)) => return Err(closed()),
+            },
+        }
+        self.health.frames_sent += 1;
+        Ok(())
+    }
+
+    fn flush(&mut self, _deadline: std::time::Instant) -> Result<bool, TransportError> {
+        // An accepted frame is already on the bus.
+        Ok(true)
     }
 
     fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError> {
         match self.rx.recv_timeout(timeout) {
             Ok(mut f) => {
                 f.timestamp = HostClock::now();
+                self.health.frames_received += 1;
                 Ok(Some(f))
             }
             Err(mpsc::RecvTimeoutError::Timeout) => Ok(None),
@@ -209,6 +366,10 @@ impl CanTransport for MemoryBus {
 
     fn name(&self) -> String {
         "memory".into()
+    }
+
+    fn health(&self) -> Health {
+        self.health.clone()
     }
 }
 
@@ -264,5 +425,36 @@ mod tests {
             b.receive(Duration::from_millis(1)),
             Err(TransportError::Closed(_))
         ));
+    }
+
+    #[test]
+    fn a_full_memory_bus_refuses_without_blocking_and_counts() {
+        let (mut a, mut b) = MemoryBus::pair_with_capacity(8, 2);
+        let f = |k: u8| Frame::new(Instant::ZERO, 0x1060_642A, &[k]).unwrap();
+        a.send(&f(1)).unwrap();
+        a.send(&f(2)).unwrap();
+        let t0 = std::time::Instant::now();
+        assert!(a.send(&f(3)).unwrap_err().is_would_block());
+        assert!(a.send(&f(3)).unwrap_err().is_would_block());
+        // Refusing is immediate: congestion never stalls the caller.
+        assert!(t0.elapsed() < Duration::from_millis(50));
+        let h = a.health();
+        assert_eq!((h.frames_sent, h.would_block), (2, 2));
+        // The other end drains one: room for exactly one more.
+        assert_eq!(b.receive(Duration::ZERO).unwrap().unwrap().data(), &[1]);
+        a.send(&f(3)).unwrap();
+        assert!(a.send(&f(4)).is_err());
+        // send_by gives up at its deadline and says so; succeeds once there is room.
+        let deadline = std::time::Instant::now() + Duration::from_millis(5);
+        assert!(!a.send_by(&f(4), deadline).unwrap());
+        assert!(std::time::Instant::now() >= deadline);
+        b.receive(Duration::ZERO).unwrap().unwrap();
+        let deadline = std::time::Instant::now() + Duration::from_millis(5);
+        assert!(a.send_by(&f(4), deadline).unwrap());
+        let got: Vec<u8> = std::iter::from_fn(|| b.receive(Duration::ZERO).unwrap())
+            .map(|f| f.data()[0])
+            .collect();
+        assert_eq!(got, [3, 4]);
+        assert_eq!(b.health().frames_received, 4);
     }
 }

@@ -9,22 +9,46 @@
 //! Bit rates: `S0`..`S8` = 10k, 20k, 50k, 100k, 125k, 250k, 500k, 800k (the Babel; python-can
 //! calls S7 750k), 1M. Classic CAN only: SLCAN has no CAN FD frames.
 
-/// Status flags reported by `F`.
+/// Status flags reported by `F` (Lawicel's layout: bit 0 receive FIFO full, 1 transmit FIFO
+/// full, 2 error warning, 3 data overrun, 5 error-passive, 6 arbitration lost, 7 bus error).
+/// Lawicel has no separate bus-off bit; propid reads bit 7 as bus-off, the state in which an
+/// adapter's controller keeps reporting bus errors and transmits nothing.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct StatusFlags(pub u8);
 
 impl StatusFlags {
-    /// The receive queue overflowed: frames were lost.
+    /// The receive queue overflowed (receive FIFO full or data overrun): frames were lost.
     pub fn overrun(self) -> bool {
-        self.0 & 0x08 != 0 || self.0 & 0x02 != 0
+        self.0 & 0x08 != 0 || self.0 & 0x01 != 0
+    }
+    /// The adapter's transmit queue is full.
+    pub fn transmit_full(self) -> bool {
+        self.0 & 0x02 != 0
+    }
+    /// An error counter passed the warning level.
+    pub fn error_warning(self) -> bool {
+        self.0 & 0x04 != 0
     }
     /// The controller is error-passive.
     pub fn error_passive(self) -> bool {
         self.0 & 0x20 != 0
     }
-    /// The controller is bus-off.
+    /// The controller is bus-off (bit 7, see the type's documentation).
     pub fn bus_off(self) -> bool {
         self.0 & 0x80 != 0
+    }
+    /// The worst state the flags report.
+    pub fn bus_state(self) -> propid_transport::BusState {
+        use propid_transport::BusState;
+        if self.bus_off() {
+            BusState::BusOff
+        } else if self.error_passive() {
+            BusState::Passive
+        } else if self.error_warning() {
+            BusState::Warning
+        } else {
+            BusState::Active
+        }
     }
 }
 
@@ -227,7 +251,8 @@ pub fn open_command(listen_only: bool) -> &'static str {
 }
 
 /// Turns the adapter's millisecond timestamps, which wrap every 60 s, into a monotonic count of
-/// microseconds.
+/// milliseconds, trusting that frames come more often than once a minute. [`AdapterClock`] also
+/// uses the host clock and is what the transport uses.
 #[derive(Default)]
 pub struct TimestampUnwrapper {
     last: Option<u16>,
@@ -245,6 +270,91 @@ impl TimestampUnwrapper {
         }
         self.last = Some(ms);
         self.base_ms + u64::from(ms)
+    }
+}
+
+/// The adapter's timestamp period: `Z1` timestamps count milliseconds modulo 60 000.
+const WRAP_MS: u64 = 60_000;
+/// A disagreement between the two clocks larger than this re-anchors the mapping at once (an
+/// adapter reset, a suspended host) and is counted.
+const RESYNC_US: u64 = 1_000_000;
+/// The offset is re-estimated once per this much host time.
+const WINDOW_US: u64 = 1_000_000;
+/// The offset moves towards its estimate by at most this fraction of the adapter time that
+/// passes (1000 ppm): crystal drift (±100 ppm) is followed, and mapped time never runs backwards.
+const SLEW_DIVISOR: i128 = 1000;
+
+/// Maps the adapter's wrapping millisecond timestamps onto the host clock, Sans-IO.
+///
+/// - Wraps: the number of 60 s periods between two frames is the one that best matches the
+///   host time that passed, so a gap of more than a minute between frames loses no period.
+/// - Offset (host minus adapter time): anchored at the first frame, so the adapter's intervals
+///   are kept exactly (the point of hardware timestamps); every second it is re-estimated as the
+///   smallest arrival latency seen, and moved there slowly (at most 1000 ppm of elapsed time),
+///   so a drifting adapter crystal is followed without a jump and mapped times stay monotonic.
+/// - A disagreement of more than a second re-anchors at once and is counted ([`Self::resyncs`]).
+#[derive(Default)]
+pub struct AdapterClock {
+    /// (last raw timestamp, its unwrapped value in ms, host arrival in µs)
+    last: Option<(u16, u64, u64)>,
+    /// Host µs minus adapter µs, as applied.
+    offset_us: i128,
+    /// Where the offset is heading.
+    target_us: i128,
+    window_start_us: u64,
+    /// The smallest (arrival − mapped time) in the current window.
+    window_min_us: Option<i128>,
+    resyncs: u64,
+}
+
+impl AdapterClock {
+    /// A clock that has seen no timestamp.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Times the mapping was re-anchored.
+    pub fn resyncs(&self) -> u64 {
+        self.resyncs
+    }
+
+    /// The host time (µs, same epoch as `host_now_us`) at which the adapter stamped a frame
+    /// with `ms`, the frame having arrived at `host_now_us`.
+    pub fn map(&mut self, ms: u16, host_now_us: u64) -> u64 {
+        let ms_in = u64::from(ms) % WRAP_MS;
+        let Some((last_raw, last_ms, last_host)) = self.last else {
+            self.anchor(ms, ms_in, host_now_us);
+            return host_now_us;
+        };
+        let d0 = (ms_in + WRAP_MS - u64::from(last_raw) % WRAP_MS) % WRAP_MS;
+        let host_ms = host_now_us.saturating_sub(last_host) / 1000;
+        // Whole periods that best explain the host time that passed.
+        let k = (host_ms.saturating_sub(d0) + WRAP_MS / 2) / WRAP_MS;
+        let adapter_ms = last_ms + d0 + k * WRAP_MS;
+        let adapter_us = i128::from(adapter_ms) * 1000;
+        let latency = i128::from(host_now_us) - adapter_us - self.offset_us;
+        if latency.unsigned_abs() > u128::from(RESYNC_US) {
+            self.resyncs += 1;
+            self.anchor(ms, adapter_ms, host_now_us);
+            return host_now_us;
+        }
+        self.window_min_us = Some(self.window_min_us.map_or(latency, |m| m.min(latency)));
+        if host_now_us.saturating_sub(self.window_start_us) >= WINDOW_US {
+            self.target_us = self.offset_us + self.window_min_us.take().unwrap_or(0);
+            self.window_start_us = host_now_us;
+        }
+        let step = i128::from(adapter_ms - last_ms) * 1000 / SLEW_DIVISOR;
+        self.offset_us += (self.target_us - self.offset_us).clamp(-step, step);
+        self.last = Some((ms, adapter_ms, host_now_us));
+        (adapter_us + self.offset_us).max(0) as u64
+    }
+
+    fn anchor(&mut self, ms: u16, adapter_ms: u64, host_now_us: u64) {
+        self.offset_us = i128::from(host_now_us) - i128::from(adapter_ms) * 1000;
+        self.target_us = self.offset_us;
+        self.window_start_us = host_now_us;
+        self.window_min_us = None;
+        self.last = Some((ms, adapter_ms, host_now_us));
     }
 }
 
@@ -329,6 +439,71 @@ mod tests {
         assert_eq!(u.unwrap(59_990), 59_990);
         assert_eq!(u.unwrap(10), 60_010);
         assert_eq!(u.unwrap(20), 60_020);
+    }
+
+    #[test]
+    fn status_flags_name_the_bus_state() {
+        use propid_transport::BusState;
+        assert_eq!(StatusFlags(0x00).bus_state(), BusState::Active);
+        assert_eq!(StatusFlags(0x04).bus_state(), BusState::Warning);
+        assert_eq!(StatusFlags(0x24).bus_state(), BusState::Passive);
+        assert_eq!(StatusFlags(0xA4).bus_state(), BusState::BusOff);
+        assert!(StatusFlags(0x01).overrun() && StatusFlags(0x08).overrun());
+        assert!(!StatusFlags(0x02).overrun() && StatusFlags(0x02).transmit_full());
+    }
+
+    #[test]
+    fn adapter_clock_across_wraps_gaps_and_resets() {
+        let mut c = AdapterClock::new();
+        let s = 1_000_000u64; // host µs per second
+                              // A burst that arrives in one read: the adapter's intervals are kept, across the wrap.
+        let t0 = c.map(59_990, 100 * s);
+        assert_eq!(t0, 100 * s);
+        assert_eq!(c.map(10, 100 * s), t0 + 20_000);
+        assert_eq!(c.map(20, 100 * s), t0 + 30_000);
+        // 130 s of silence: two more wraps; the raw value alone would say 10 s.
+        let got = c.map(10_020, 230 * s + 30_000);
+        // The burst showed the first frame arrived ≥ 30 ms late; the gap lets the offset take
+        // that in (1000 ppm of 130 s allows it all): stamped 30 ms before arrival.
+        assert_eq!(got, 230 * s);
+        assert_eq!(c.resyncs(), 0);
+    }
+
+    #[test]
+    fn adapter_clock_follows_a_drifting_crystal_monotonically() {
+        for ppm in [-100i64, 100] {
+            let mut c = AdapterClock::new();
+            let mut host = 5_000_000u64;
+            let mut ms = 0u64;
+            let mut last_t = c.map(0, host + 300);
+            let mut worst = 0i64;
+            for _ in 0..3000 {
+                ms += 100;
+                host = (host as i64 + 100_000 + ppm / 10) as u64; // 100 ms ± drift
+                let t = c.map((ms % 60_000) as u16, host + 300);
+                assert!(
+                    t > last_t,
+                    "mapped time ran backwards: {last_t} then {t}, host {host}"
+                );
+                last_t = t;
+                worst = worst.max((host as i64 - t as i64).abs());
+            }
+            // Without following, the error would reach 3000 × 10 µs = 30 ms.
+            // 300 µs is the latency the anchor cannot know; drift adds at most ~100 µs to it.
+            assert!(worst <= 500, "{ppm} ppm: {worst} µs");
+            assert_eq!(c.resyncs(), 0);
+        }
+    }
+
+    #[test]
+    fn adapter_clock_re_anchors_after_a_reset() {
+        let mut c = AdapterClock::new();
+        c.map(30_000, 10_000_000);
+        c.map(30_100, 10_100_000);
+        // The adapter restarts its clock 5 ms later: re-anchored at arrival, and counted.
+        assert_eq!(c.map(0, 10_105_000), 10_105_000);
+        assert_eq!(c.resyncs(), 1);
+        assert_eq!(c.map(10, 10_115_000), 10_115_000);
     }
 
     proptest::proptest! {

@@ -1,64 +1,124 @@
 //! SLCAN over a serial port.
+//!
+//! Writes never wait for the adapter: the port is non-blocking (Unix: `O_NONBLOCK` on the file
+//! descriptor) or has a 1 ms write timeout (Windows), a line the port takes only in part keeps
+//! its tail in `tail`, and that tail goes out before any other byte. Replies (`\r`, `z`, BELL)
+//! come back in the order the lines went out, so each is matched to the oldest line still
+//! awaiting one; that is how a BELL names the command it refuses.
 
+use std::collections::VecDeque;
 use std::io::{ErrorKind, Read, Write};
 use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::time::Instant;
-use propid_transport::{CanTransport, HostClock, TransportError};
+use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
 
 use crate::codec::{
-    bitrate_command, encode_frame, open_command, raw_bitrate_command, Decoder, Event,
-    TimestampUnwrapper,
+    bitrate_command, encode_frame, open_command, raw_bitrate_command, AdapterClock, Decoder, Event,
 };
 
-/// How long a write may wait for room in the adapter's buffer before the adapter counts as stuck.
-const WRITE_TIMEOUT: Duration = Duration::from_millis(500);
+/// How long one write may wait for room. Zero on Unix, where the port is non-blocking;
+/// Windows' serial timeouts treat zero as "forever", so 1 ms there.
+const WRITE_WAIT: Duration = if cfg!(unix) {
+    Duration::ZERO
+} else {
+    Duration::from_millis(1)
+};
+/// How long the set-up commands may take to leave.
+const COMMAND_DEADLINE: Duration = Duration::from_millis(500);
+/// How long `configure` waits for the adapter's replies. A peer that never replies (another
+/// host on a pseudo-terminal) costs this once; a Babel replies within a millisecond.
+const REPLY_WAIT: Duration = Duration::from_millis(100);
+/// Lines remembered while awaiting a reply; a peer that never replies must not grow it.
+const AWAITING_MAX: usize = 256;
+/// How often the adapter's status flags are asked for (`F`).
+const STATUS_INTERVAL: Duration = Duration::from_secs(1);
 
 /// An SLCAN adapter on a serial port (or one end of a pseudo-terminal pair).
 pub struct SlcanTransport {
     port: Box<dyn serialport::SerialPort>,
     name: String,
     decoder: Decoder,
-    pending: std::collections::VecDeque<Frame>,
+    pending: VecDeque<Frame>,
     events: Vec<Event>,
-    unwrapper: TimestampUnwrapper,
-    /// Host time of the first adapter timestamp, to map adapter time onto the host clock.
-    adapter_epoch: Option<(u64, Instant)>,
-    /// Status events seen (overrun, error-passive, bus-off).
-    pub status_events: u64,
-    /// Commands the adapter refused.
-    pub nacks: u64,
+    clock: AdapterClock,
+    /// Bytes of accepted lines the port has not taken yet; they leave before anything else.
+    tail: Vec<u8>,
+    /// Lines sent and not yet answered, oldest first (without `\r`).
+    awaiting: VecDeque<String>,
+    /// Lines refused since the last `configure` began.
+    refused_recent: Vec<String>,
+    health: Health,
+    status_interval: Option<Duration>,
+    next_status: std::time::Instant,
+    /// Set once the device has disappeared: every later call fails the same way.
+    gone: bool,
 }
 
 impl SlcanTransport {
-    /// Opens `path` at `baud` and configures the adapter for `bitrate` with timestamps on.
+    /// Opens `path` at `baud` (non-blocking) and configures the adapter for `bitrate` with
+    /// timestamps on.
     pub fn open(path: &str, baud: u32, bitrate: u32) -> Result<Self, TransportError> {
         let port = serialport::new(path, baud)
             .timeout(Duration::from_millis(10))
-            .open()
+            .open_native()
             .map_err(|e| TransportError::Io {
-                device: path.to_string(),
+                device: format!("slcan:{path}"),
                 source: std::io::Error::other(e.to_string()),
             })?;
-        let mut t = Self::from_port(port, path);
+        #[cfg(unix)]
+        let mut t = Self::from_tty(port, path)?;
+        #[cfg(not(unix))]
+        let mut t = Self::from_port(Box::new(port), path);
         t.configure(bitrate)?;
         Ok(t)
     }
 
-    /// Wraps an already open port (a pty end in tests and the demo) without configuring it.
+    /// Wraps an open terminal (a pty end in tests and the demo) without configuring it, and
+    /// makes its file descriptor non-blocking so that no write can stall the caller.
+    #[cfg(unix)]
+    pub fn from_tty(port: serialport::TTYPort, name: &str) -> Result<Self, TransportError> {
+        use std::os::fd::{AsRawFd, BorrowedFd};
+        // SAFETY: `port` owns this descriptor and outlives the borrow, which ends with the two
+        // fcntl calls below; nothing closes it meanwhile.
+        let fd = unsafe { BorrowedFd::borrow_raw(port.as_raw_fd()) };
+        let flags = rustix::fs::fcntl_getfl(fd)
+            .and_then(|f| rustix::fs::fcntl_setfl(fd, f | rustix::fs::OFlags::NONBLOCK));
+        if let Err(e) = flags {
+            return Err(TransportError::Io {
+                device: format!("slcan:{name}"),
+                source: std::io::Error::from(e),
+            });
+        }
+        Ok(Self::from_port(Box::new(port), name))
+    }
+
+    /// Wraps an already open port without configuring it. On Unix prefer [`Self::from_tty`]:
+    /// a port left blocking can stall a write until a whole line fits.
     pub fn from_port(port: Box<dyn serialport::SerialPort>, name: &str) -> Self {
         SlcanTransport {
             port,
             name: format!("slcan:{name}"),
             decoder: Decoder::new(),
-            pending: Default::default(),
+            pending: VecDeque::new(),
             events: Vec::new(),
-            unwrapper: TimestampUnwrapper::default(),
-            adapter_epoch: None,
-            status_events: 0,
-            nacks: 0,
+            clock: AdapterClock::new(),
+            tail: Vec::new(),
+            awaiting: VecDeque::new(),
+            refused_recent: Vec::new(),
+            health: Health::default(),
+            status_interval: Some(STATUS_INTERVAL),
+            next_status: std::time::Instant::now() + STATUS_INTERVAL,
+            gone: false,
         }
+    }
+
+    /// How often to ask the adapter for its status flags (`F`); `None` never asks (a status
+    /// is then only known when the adapter volunteers it). A refusal triggers a poll at once.
+    pub fn set_status_interval(&mut self, every: Option<Duration>) {
+        self.status_interval = every;
+        self.next_status = std::time::Instant::now() + every.unwrap_or(Duration::ZERO);
     }
 
     /// Sends the set-up commands for a rate without an `S` code: close, `sXXYY` with the raw bus
@@ -69,32 +129,66 @@ impl SlcanTransport {
         btr1: u8,
         listen_only: bool,
     ) -> Result<(), TransportError> {
-        for cmd in [
-            "C\r".to_string(),
-            raw_bitrate_command(btr0, btr1),
-            "Z1\r".into(),
-            open_command(listen_only).into(),
-        ] {
-            self.write(cmd.as_bytes())?;
-        }
-        Ok(())
+        let rate = raw_bitrate_command(btr0, btr1);
+        self.run_commands(&["C\r", &rate, "Z1\r", open_command(listen_only)])
     }
 
-    /// Sends the set-up commands: close, bit rate, timestamps on, open.
+    /// Sends the set-up commands: close, bit rate, timestamps on, open. Waits briefly for the
+    /// replies: a refused bit rate or open is [`TransportError::Refused`]; a refused close (the
+    /// channel was closed already) or timestamp command is only counted. A peer that does not
+    /// reply at all is accepted.
     pub fn configure(&mut self, bitrate: u32) -> Result<(), TransportError> {
-        let rate = match bitrate_command(bitrate) {
-            Some(cmd) => cmd.to_string(),
-            None => {
-                return Err(TransportError::Unsupported(format!(
-                    "{}: no SLCAN bit-rate code for {bitrate} bit/s (use 10k, 20k, 50k, 100k, 125k, 250k, 500k, 800k or 1M, or raw bus timing registers with SlcanTransport::configure_raw)",
-                    self.name
-                )))
+        let rate = bitrate_command(bitrate).ok_or_else(|| {
+            TransportError::Unsupported(format!(
+                "{}: no SLCAN bit-rate code for {bitrate} bit/s (use 10k, 20k, 50k, 100k, 125k, 250k, 500k, 800k or 1M, or raw bus timing registers with SlcanTransport::configure_raw)",
+                self.name
+            ))
+        })?;
+        self.run_commands(&["C\r", rate, "Z1\r", "O\r"])
+    }
+
+    fn run_commands(&mut self, commands: &[&str]) -> Result<(), TransportError> {
+        self.check_gone()?;
+        self.refused_recent.clear();
+        let deadline = std::time::Instant::now() + COMMAND_DEADLINE;
+        for cmd in commands {
+            self.enqueue_line(cmd.as_bytes());
+            if !self.flush(deadline)? {
+                return Err(TransportError::Io {
+                    device: self.name.clone(),
+                    source: std::io::Error::new(
+                        ErrorKind::TimedOut,
+                        format!(
+                            "the adapter did not take the command `{}` within {} ms",
+                            cmd.trim_end(),
+                            COMMAND_DEADLINE.as_millis()
+                        ),
+                    ),
+                });
             }
-        };
-        for cmd in ["C\r", &rate, "Z1\r", "O\r"] {
-            self.write(cmd.as_bytes())?;
         }
-        Ok(())
+        // Wait for the replies (or for a peer that gives none).
+        let until = std::time::Instant::now() + REPLY_WAIT;
+        let is_setup = |l: &String| commands.iter().any(|c| c.trim_end() == l);
+        while self.awaiting.iter().any(is_setup) {
+            let left = until.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            self.read_once(left.min(Duration::from_millis(5)))?;
+        }
+        let fatal = self
+            .refused_recent
+            .iter()
+            .find(|c| commands.iter().any(|k| k.trim_end() == c.as_str()))
+            .filter(|c| !c.starts_with('C') && !c.starts_with('Z'));
+        match fatal {
+            Some(command) => Err(TransportError::Refused {
+                device: self.name.clone(),
+                command: command.clone(),
+            }),
+            None => Ok(()),
+        }
     }
 
     /// Lines skipped as garbage.
@@ -102,31 +196,143 @@ impl SlcanTransport {
         self.decoder.garbage_count()
     }
 
-    fn write(&mut self, bytes: &[u8]) -> Result<(), TransportError> {
-        // The port's timeout is shortened while receiving; a write may wait for the adapter
-        // (or the peer on a pseudo-terminal) to drain its buffer, up to WRITE_TIMEOUT.
-        let _ = self.port.set_timeout(WRITE_TIMEOUT);
-        self.port.write_all(bytes).map_err(|e| self.io_error(e))?;
+    fn check_gone(&self) -> Result<(), TransportError> {
+        if self.gone {
+            Err(TransportError::Closed(self.name.clone()))
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Queues a whole line behind whatever is pending and remembers it awaits a reply.
+    fn enqueue_line(&mut self, line: &[u8]) {
+        self.tail.extend_from_slice(line);
+        self.expect_reply(line);
+    }
+
+    fn expect_reply(&mut self, line: &[u8]) {
+        if self.awaiting.len() == AWAITING_MAX {
+            self.awaiting.pop_front();
+        }
+        let text = String::from_utf8_lossy(line);
+        self.awaiting
+            .push_back(text.trim_end_matches('\r').to_string());
+    }
+
+    /// One write that does not wait: the bytes the port took (0 when it took none).
+    fn write_some(&mut self, bytes: &[u8]) -> Result<usize, TransportError> {
+        let _ = self.port.set_timeout(WRITE_WAIT);
+        match self.port.write(bytes) {
+            Ok(n) => Ok(n),
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                ) =>
+            {
+                Ok(0)
+            }
+            Err(e) => Err(self.io_error(e)),
+        }
+    }
+
+    /// Writes as much of the pending tail as the port takes now; `true` when none is left.
+    fn push_tail(&mut self) -> Result<bool, TransportError> {
+        while !self.tail.is_empty() {
+            let tail = std::mem::take(&mut self.tail);
+            let n = self.write_some(&tail);
+            self.tail = tail;
+            match n? {
+                0 => return Ok(false),
+                n => {
+                    self.tail.drain(..n);
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// Offers a whole line: `false` (nothing written) when the port takes none of it now.
+    fn offer(&mut self, line: &[u8]) -> Result<bool, TransportError> {
+        if !self.push_tail()? {
+            return Ok(false);
+        }
+        let n = self.write_some(line)?;
+        if n == 0 {
+            return Ok(false);
+        }
+        self.tail.extend_from_slice(&line[n..]);
+        self.expect_reply(line);
+        Ok(true)
+    }
+
+    /// Asks for the status flags when a poll is due and the line is free.
+    fn poll_status(&mut self) -> Result<(), TransportError> {
+        let Some(every) = self.status_interval else {
+            return Ok(());
+        };
+        let now = std::time::Instant::now();
+        if now >= self.next_status && self.offer(b"F\r")? {
+            self.next_status = now + every;
+        }
         Ok(())
     }
 
-    /// EIO (5) is what reading a pseudo-terminal or a USB CDC port gives when the other side is
-    /// gone.
-    fn io_error(&self, e: std::io::Error) -> TransportError {
-        match e.kind() {
-            _ if e.raw_os_error() == Some(5) => TransportError::Closed(self.name.clone()),
-            ErrorKind::BrokenPipe | ErrorKind::NotConnected | ErrorKind::UnexpectedEof => {
-                TransportError::Closed(self.name.clone())
+    /// Reads what arrives within `wait`; frames go to `pending`, replies to the counters.
+    fn read_once(&mut self, wait: Duration) -> Result<(), TransportError> {
+        let mut buf = [0u8; 1024];
+        let _ = self.port.set_timeout(wait);
+        match self.port.read(&mut buf) {
+            Ok(0) => Err(self.disappeared()),
+            Ok(n) => {
+                let now = HostClock::now();
+                self.decoder.push(&buf[..n], &mut self.events);
+                self.absorb(now);
+                Ok(())
             }
-            _ => TransportError::Io {
-                device: self.name.clone(),
-                source: e,
-            },
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                ) =>
+            {
+                Ok(())
+            }
+            Err(e) => Err(self.io_error(e)),
+        }
+    }
+
+    fn disappeared(&mut self) -> TransportError {
+        self.gone = true;
+        TransportError::Closed(self.name.clone())
+    }
+
+    /// What a failed read or write means. A pseudo-terminal whose other side closed, or a USB
+    /// CDC port whose adapter was unplugged, reports a hang-up (which `serialport` gives as
+    /// BrokenPipe) or EIO/ENXIO/ENODEV; `serialport` keeps only the text of the last three.
+    fn io_error(&mut self, e: std::io::Error) -> TransportError {
+        let text = e.to_string();
+        let gone_text = ["I/O error", "No such device", "Input/output error"];
+        let gone = matches!(
+            e.kind(),
+            ErrorKind::BrokenPipe
+                | ErrorKind::NotConnected
+                | ErrorKind::UnexpectedEof
+                | ErrorKind::ConnectionReset
+                | ErrorKind::ConnectionAborted
+        ) || matches!(e.raw_os_error(), Some(5 | 6 | 19))
+            || gone_text.iter().any(|t| text.contains(t));
+        if gone {
+            return self.disappeared();
+        }
+        TransportError::Io {
+            device: self.name.clone(),
+            source: e,
         }
     }
 
     fn absorb(&mut self, now: Instant) {
-        for event in self.events.drain(..) {
+        for event in std::mem::take(&mut self.events) {
             match event {
                 Event::Frame {
                     id,
@@ -136,28 +342,50 @@ impl SlcanTransport {
                     adapter_ms,
                 } => {
                     let timestamp = match adapter_ms {
-                        Some(ms) => {
-                            let ms = self.unwrapper.unwrap(ms);
-                            let (ms0, host0) = *self.adapter_epoch.get_or_insert((ms, now));
-                            host0 + Duration::from_millis(ms - ms0)
-                        }
+                        Some(ms) => Instant::from_micros(self.clock.map(ms, now.as_micros())),
                         None => now,
                     };
                     if let Some(f) = Frame::new(timestamp, id, &data) {
                         self.pending.push_back(f);
                     }
                 }
-                Event::Status(_) => self.status_events += 1,
-                Event::Nack => self.nacks += 1,
-                // Standard-ID and remote frames are not Cyphal; acks and info need no action.
+                Event::Status(flags) => {
+                    self.health.status_reports += 1;
+                    self.health.status_flags = Some(flags.0);
+                    self.health.bus_state = flags.bus_state();
+                    if flags.overrun() {
+                        self.health.overruns += 1;
+                    }
+                    // `F` is answered by its report, not by an empty line.
+                    if self.awaiting.front().is_some_and(|l| l == "F") {
+                        self.awaiting.pop_front();
+                    }
+                }
+                Event::Ack | Event::TransmitAck => {
+                    self.awaiting.pop_front();
+                }
+                Event::Nack => {
+                    let line = self
+                        .awaiting
+                        .pop_front()
+                        .unwrap_or_else(|| "(no command awaiting a reply)".into());
+                    self.health.refused += 1;
+                    self.health.last_refused = Some(line.clone());
+                    self.refused_recent.push(line);
+                    // Find out why: a refused frame usually means bus-off or a full queue.
+                    self.next_status = std::time::Instant::now();
+                }
+                // Standard-ID and remote frames are not Cyphal; info needs no action.
                 _ => {}
             }
         }
+        self.health.timestamp_resyncs = self.clock.resyncs();
     }
 }
 
 impl CanTransport for SlcanTransport {
     fn send(&mut self, frame: &Frame) -> Result<(), TransportError> {
+        self.check_gone()?;
         let line = encode_frame(frame.id(), frame.data()).ok_or_else(|| {
             TransportError::Unsupported(format!(
                 "{}: SLCAN carries Classic CAN only; a {}-byte (CAN FD) frame cannot be sent (set UAVCAN__CAN__MTU=8)",
@@ -165,31 +393,54 @@ impl CanTransport for SlcanTransport {
                 frame.data().len()
             ))
         })?;
-        self.write(line.as_bytes())
+        let accepted = self.offer(line.as_bytes())?;
+        // After the frame, so that a poll never takes the room the frame could have had.
+        self.poll_status()?;
+        if accepted {
+            self.health.frames_sent += 1;
+            Ok(())
+        } else {
+            self.health.would_block += 1;
+            Err(TransportError::WouldBlock)
+        }
     }
 
-    fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError> {
-        let deadline = std::time::Instant::now() + timeout;
-        let mut buf = [0u8; 1024];
+    fn flush(&mut self, deadline: std::time::Instant) -> Result<bool, TransportError> {
+        self.check_gone()?;
         loop {
-            if let Some(f) = self.pending.pop_front() {
-                return Ok(Some(f));
+            if self.push_tail()? {
+                return Ok(true);
             }
             let left = deadline.saturating_duration_since(std::time::Instant::now());
             if left.is_zero() {
-                return Ok(None);
+                return Ok(false);
             }
-            let _ = self.port.set_timeout(left.min(Duration::from_millis(50)));
-            match self.port.read(&mut buf) {
-                Ok(0) => return Err(TransportError::Closed(self.name.clone())),
-                Ok(n) => {
-                    let now = HostClock::now();
-                    self.decoder.push(&buf[..n], &mut self.events);
-                    self.absorb(now);
-                }
-                Err(e) if e.kind() == ErrorKind::TimedOut || e.kind() == ErrorKind::WouldBlock => {}
-                Err(e) if e.kind() == ErrorKind::Interrupted => {}
-                Err(e) => return Err(self.io_error(e)),
+            // Keep reading while waiting: a peer blocked on writing to us may be the one that
+            // is not draining our output.
+            self.read_once(left.min(Duration::from_millis(1)))?;
+        }
+    }
+
+    fn receive(&mut self, timeout: Duration) -> Result<Option<Frame>, TransportError> {
+        self.check_gone()?;
+        let deadline = std::time::Instant::now() + timeout;
+        loop {
+            if let Some(f) = self.pending.pop_front() {
+                self.health.frames_received += 1;
+                return Ok(Some(f));
+            }
+            let tail_left = !self.push_tail()?;
+            self.poll_status()?;
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            // With output pending, wake up often to move it along.
+            let step = if tail_left {
+                Duration::from_millis(1)
+            } else {
+                Duration::from_millis(50)
+            };
+            self.read_once(left.min(step))?;
+            if left.is_zero() && self.pending.is_empty() {
+                return Ok(None);
             }
         }
     }
@@ -200,5 +451,17 @@ impl CanTransport for SlcanTransport {
 
     fn name(&self) -> String {
         self.name.clone()
+    }
+
+    fn health(&self) -> Health {
+        Health {
+            garbage: self.decoder.garbage_count(),
+            bus_state: if self.health.status_reports == 0 {
+                BusState::Unknown
+            } else {
+                self.health.bus_state
+            },
+            ..self.health.clone()
+        }
     }
 }

@@ -1,0 +1,158 @@
+//! `propid report RUN.tsv`: the one file a person opens after a run — the fit, the diagnosis,
+//! interactive zoomable plots, and the commands that reproduce it, in a single self-contained
+//! HTML page (no network needed to view it).
+//!
+//! ```text
+//!  RUN.tsv ─► science::fit::fit_path ─► fit table + fit figure
+//!          ─► science::diagnose::diagnose ─► verdict text + diagnosis figure
+//!          ─► html::page (uPlot embedded) ─► report.html
+//! ```
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text, Options};
+use propid_science::fit::{figure, fit_path, FitOptions, FitReport};
+
+use crate::html;
+use crate::InputError;
+
+/// Arguments of `propid report`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The recording (propid's TSV, from `drive`, `sim`, `replay` or `import`).
+    pub file: PathBuf,
+    /// Where to write the page (default: the recording's name with `.html`).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Propeller diameter [m], to report the torque coefficient C_Q.
+    #[arg(long)]
+    pub diameter: Option<f64>,
+}
+
+fn fit_rows(fit: &FitReport) -> Vec<Vec<String>> {
+    let mut rows = vec![
+        vec![
+            "J (inertia)".into(),
+            format!("{:.6e}", fit.mass),
+            format!("{:.2e}", fit.mass_stderr),
+            "kg·m²".into(),
+        ],
+        vec![
+            "c1 (viscous)".into(),
+            format!("{:.6e}", fit.c1 + 0.0),
+            format!("{:.2e}", fit.c1_stderr),
+            "N·m·s/rad".into(),
+        ],
+        vec![
+            "c2 (quadratic drag)".into(),
+            format!("{:.6e}", fit.c2),
+            format!("{:.2e}", fit.c2_stderr),
+            "N·m·s²/rad²".into(),
+        ],
+        vec![
+            "RMS of the acceleration residual".into(),
+            format!("{:.4e}", fit.rms),
+            String::new(),
+            "rad/s²".into(),
+        ],
+        vec![
+            "samples fitted (after the seed's trimming)".into(),
+            fit.samples.to_string(),
+            String::new(),
+            format!("of {} rows", fit.rows),
+        ],
+        vec![
+            "condition number".into(),
+            format!("{:.3e}", fit.condition_number),
+            String::new(),
+            String::new(),
+        ],
+    ];
+    if let Some(cq) = fit.c_q {
+        rows.push(vec![
+            "C_Q (torque coefficient)".into(),
+            format!("{cq:.5e}"),
+            String::new(),
+            "1".into(),
+        ]);
+    }
+    rows
+}
+
+/// Builds the report page for a recording. `reproduce` lists the commands that made the
+/// recording (shown before the commands that make the report).
+pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyhow::Result<String> {
+    let name = tsv.display().to_string();
+    let mut sections = Vec::new();
+    let (fit, fit_samples) = fit_path(tsv, fit_options, &mut |_, _| {})?;
+    let mut s = String::from("<section><h2>Fit: the seed's model, solved exactly</h2>\n");
+    s += "<p>J·dω/dt = F − c1·ω − c2·ω·|ω|, with the seed's trimming (the last complete run of rows, \
+          minus its first 10 %) and bounds.</p>\n";
+    s += &html::table(&["parameter", "value", "± 1σ", "unit"], &fit_rows(&fit));
+    for w in &fit.warnings {
+        s += &format!("<p class=\"verdict\">warning: {}</p>\n", html::escape(w));
+    }
+    s += "</section>\n";
+    sections.push(s);
+    sections.push(html::figure_section(&figure(&fit, &fit_samples), "fit"));
+
+    let (samples, skipped) = read_samples(tsv)?;
+    match diagnose(&samples, Options::default()) {
+        Ok(report) => {
+            let text = to_text(&report, &name);
+            let mut s = String::from(
+                "<section><h2>Diagnosis: what the model gets wrong, and why</h2>\n<pre>",
+            );
+            s += &html::escape(&text);
+            s += "</pre>\n";
+            if skipped > 0 {
+                s += &format!("<p>{skipped} rows with missing values were skipped.</p>\n");
+            }
+            s += "</section>\n";
+            sections.push(s);
+            sections.push(html::figure_section(&report_figure(&report), "diagnose"));
+        }
+        Err(e) => sections.push(format!(
+            "<section><h2>Diagnosis</h2><p class=\"verdict\">cannot judge: {}</p></section>\n",
+            html::escape(&e.0)
+        )),
+    }
+
+    let mut s = String::from("<section><h2>Reproduce</h2>\n<pre>");
+    for c in reproduce {
+        s += &html::escape(c);
+        s.push('\n');
+    }
+    let diameter = fit_options
+        .diameter
+        .map(|d| format!(" --diameter {d}"))
+        .unwrap_or_default();
+    s += &html::escape(&format!(
+        "propid fit {name}{diameter}\npropid diagnose {name}\npropid report {name}{diameter}\n"
+    ));
+    s += "</pre>\n<p>Made by propid ";
+    s += env!("CARGO_PKG_VERSION");
+    s += ". Plots: drag to zoom, double-click to reset.</p></section>\n";
+    sections.push(s);
+    Ok(html::page(&format!("propid report: {name}"), &sections))
+}
+
+/// Runs `propid report`.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if !args.file.is_file() {
+        return Err(InputError(format!("{}: no such file", args.file.display())).into());
+    }
+    let out = args
+        .output
+        .clone()
+        .unwrap_or_else(|| args.file.with_extension("html"));
+    let options = FitOptions {
+        diameter: args.diameter,
+        ..FitOptions::default()
+    };
+    let page = build(&args.file, &options, &[])?;
+    std::fs::write(&out, page).with_context(|| format!("cannot write {}", out.display()))?;
+    eprintln!("report written to {}", out.display());
+    Ok(())
+}

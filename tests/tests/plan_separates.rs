@@ -1,0 +1,66 @@
+//! `propid plan`'s promise, checked end to end with the diagnosis: on the seed's sine a hidden
+//! Coulomb friction cannot be told from a torque lag, and on the planned pattern it is named,
+//! alone, with its magnitude; a hidden torque lag is named on the planned pattern too.
+
+use propid_science::diagnose::{diagnose, Options};
+use propid_science::excitation::{Excitation, Pattern};
+use propid_science::plan::{design, Constraints, Prior};
+use propid_science::stand::{simulate, StandConfig};
+
+fn named(samples: &[propid_io::tsv::Sample]) -> Vec<(String, f64)> {
+    let report = diagnose(samples, Options::default()).expect("diagnosable");
+    report
+        .effects
+        .iter()
+        .map(|e| (e.name.to_string(), e.value))
+        .collect()
+}
+
+#[test]
+fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
+    let stand = StandConfig::default();
+    let plan = design(
+        &Prior::new(stand.inertia, stand.c2, stand.max_torque),
+        &Constraints {
+            lo: 0.1,
+            hi: 0.9,
+            max_speed: None,
+            max_duration: 200.0,
+        },
+        None,
+    )
+    .unwrap();
+    let planned = Excitation {
+        duration: 60.0,
+        ..plan.excitation
+    };
+    let sine = Excitation {
+        pattern: Pattern::Sine,
+        period: 2.0,
+        ..planned
+    };
+    for seed in [3, 4] {
+        let coulomb = StandConfig {
+            coulomb: 0.002,
+            ..stand
+        };
+        let on_sine = named(&simulate(coulomb, &sine, seed));
+        assert!(
+            !(on_sine.len() == 1 && on_sine[0].0 == "coulomb_friction"),
+            "seed {seed}: the sine was expected to confuse friction with a lag: {on_sine:?}"
+        );
+        let on_plan = named(&simulate(coulomb, &planned, seed));
+        assert_eq!(on_plan.len(), 1, "seed {seed}: {on_plan:?}");
+        assert_eq!(on_plan[0].0, "coulomb_friction", "seed {seed}: {on_plan:?}");
+        assert!((on_plan[0].1 / 0.002 - 1.0).abs() < 0.1, "{on_plan:?}");
+
+        let lag = StandConfig {
+            torque_lag: 0.012,
+            ..stand
+        };
+        let on_plan = named(&simulate(lag, &planned, seed));
+        assert_eq!(on_plan.len(), 1, "seed {seed}: {on_plan:?}");
+        assert_eq!(on_plan[0].0, "torque_lag", "seed {seed}: {on_plan:?}");
+        assert!((on_plan[0].1 / 0.012 - 1.0).abs() < 0.1, "{on_plan:?}");
+    }
+}
