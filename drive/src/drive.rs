@@ -186,7 +186,12 @@ impl Driver<'_> {
 
     fn flush(&mut self, now: Instant) -> Result<(), String> {
         while let Some(f) = self.node.poll_transmit(now) {
-            self.transport.send(&f).map_err(|e| e.to_string())?;
+            match self.transport.send(&f) {
+                // A congested link (a slow reader at the other end): the frame is dropped and
+                // counted by the transport; the next setpoint follows within a period.
+                Err(e) if e.is_would_block() => {}
+                r => r.map_err(|e| e.to_string())?,
+            }
         }
         Ok(())
     }

@@ -47,9 +47,16 @@ pub struct Args {
 
 fn show(v: &Value) -> String {
     if v.is_numeric() {
+        let single = matches!(v, Value::Real32(_) | Value::Real16(_));
+        let bits = matches!(v, Value::Bit(_));
         let items: Vec<String> = (0..v.len())
             .filter_map(|i| v.float_at(i))
-            .map(|x| format!("{x}"))
+            .map(|x| match () {
+                _ if bits => (x != 0.0).to_string(),
+                // Shortest text that reads back as the same float32.
+                _ if single => format!("{}", x as f32),
+                _ => format!("{x}"),
+            })
             .collect();
         items.join(" ")
     } else {
