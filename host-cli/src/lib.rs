@@ -10,6 +10,7 @@
 //!  propid-io         the TSV sample stream, importers, candump logs
 //!  propid-science    excitation, stand simulators, fit, diagnosis
 //!  propid-drive      the driver and the simulated Telega
+//!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
 //!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
 //! ```
 #![deny(missing_docs)]
@@ -25,9 +26,18 @@ pub use propid_io::InputError;
 
 /// The exit status for an error: 2 for bad input, 1 otherwise.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
+    use propid_io::candump::ReplayError;
+    use propid_science::fit::FitError;
+    // The libraries' error enums wrap bad input transparently (their `source()` is the inner
+    // error's source), so look at the enums themselves too.
     let bad_input = err.chain().any(|e| {
         e.downcast_ref::<InputError>().is_some()
             || e.downcast_ref::<propid_io::tsv::TsvError>().is_some()
+            || matches!(
+                e.downcast_ref::<FitError>(),
+                Some(FitError::Input(_) | FitError::Tsv(_))
+            )
+            || matches!(e.downcast_ref::<ReplayError>(), Some(ReplayError::Input(_)))
     });
     if bad_input {
         2

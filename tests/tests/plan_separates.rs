@@ -64,3 +64,75 @@ fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
         assert!((on_plan[0].1 / 0.012 - 1.0).abs() < 0.1, "{on_plan:?}");
     }
 }
+
+/// The plan's predicted errors against the scatter of estimates on the independent,
+/// mechanism-level stand (its white report noise set like the formula-level stand's).
+#[test]
+fn predicted_errors_hold_on_the_mechanism_level_stand() {
+    use propid_core::estimate::{LoadBounds, LoadEstimator};
+    use propid_mechsim::{MechConfig, Run};
+    let config = MechConfig::default().with_typical_noise();
+    let prior = Prior::new(
+        config.rotor.inertia,
+        config.rotor.drag.k,
+        config.drive.max_torque,
+    );
+    let plan = design(
+        &prior,
+        &Constraints {
+            lo: 0.1,
+            hi: 0.9,
+            max_speed: None,
+            max_duration: 200.0,
+        },
+        None,
+    )
+    .unwrap();
+    let planned = Excitation {
+        duration: 20.0,
+        ..plan.excitation
+    };
+    let sine = Excitation {
+        pattern: Pattern::Sine,
+        period: 2.0,
+        ..planned
+    };
+    for excitation in [planned, sine] {
+        let (predicted, _, _) = propid_science::plan::evaluate(&prior, &excitation, 1).unwrap();
+        let run = Run {
+            init_setpoint: excitation.hi,
+            init_duration: excitation.init_duration,
+            duration: excitation.duration,
+        };
+        let (mut js, mut cs) = (Vec::new(), Vec::new());
+        for seed in 0..24 {
+            let records =
+                propid_mechsim::simulate(config, &run, |t| excitation.setpoint(t), seed).unwrap();
+            let mut est = LoadEstimator::<f64>::new();
+            for r in &records {
+                est.update(r.force, r.velocity, r.acceleration);
+            }
+            let e = est.estimate(&LoadBounds::default()).unwrap();
+            js.push(e.mass);
+            cs.push(e.c2);
+        }
+        let rel_sd = |v: &[f64]| {
+            let n = v.len() as f64;
+            let m = v.iter().sum::<f64>() / n;
+            (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt() / m
+        };
+        let rj = rel_sd(&js) / predicted.rel_stderr_j;
+        let rc = rel_sd(&cs) / predicted.rel_stderr_c2;
+        // 24 seeds: the sample standard deviation scatters by ~15 % by itself.
+        assert!(
+            (0.75..=1.25).contains(&rj),
+            "{}: J {rj}",
+            excitation.pattern
+        );
+        assert!(
+            (0.75..=1.25).contains(&rc),
+            "{}: c2 {rc}",
+            excitation.pattern
+        );
+    }
+}
