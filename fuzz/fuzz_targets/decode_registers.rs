@@ -52,7 +52,8 @@ fuzz_target!(|bytes: &[u8]| {
         let _ = registry.add(&n, v.clone(), true, false);
     }
     let response = registry.access(&request);
-    if let Some(r) = registry.get(&name) {
+    // Only when the request named that register (a non-UTF-8 name was replaced by "x").
+    if let Some(r) = registry.get(&name).filter(|_| request.name.as_str() == Some(&name)) {
         assert_eq!(r.value.tag(), response.value.tag());
         assert_eq!(r.value.tag(), kinds[0].tag());
         assert_eq!(r.value.len(), kinds[0].len());
@@ -60,7 +61,11 @@ fuzz_target!(|bytes: &[u8]| {
     if let Some(from) = value {
         for to in &kinds {
             if let Some(c) = convert(to, &from) {
-                assert_eq!((c.tag(), c.len()), (to.tag(), to.len()));
+                // Text keeps its type but not its length (the specification exempts it).
+                assert_eq!(c.tag(), to.tag());
+                if to.is_numeric() {
+                    assert_eq!(c.len(), to.len());
+                }
             }
         }
     }
