@@ -6,6 +6,6 @@
 set -euo pipefail
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked --quiet
 cd fuzz
-for target in decode_payloads reassembler slcan_decoder candump tsv_reader importers; do
+for target in $(cargo fuzz list); do
   RUSTC_BOOTSTRAP=1 cargo fuzz run "$target" -- -max_total_time="${FUZZ_SECONDS:-20}" 2>&1 | tail -n 1
 done

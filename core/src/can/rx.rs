@@ -170,6 +170,11 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize>
         self.stats
     }
 
+    /// The ports subscribed to.
+    pub fn subscriptions(&self) -> &[Subscription] {
+        &self.subscriptions
+    }
+
     /// Static RAM one session takes, in bytes.
     pub const fn session_size() -> usize {
         core::mem::size_of::<Option<Session<EXTENT>>>()

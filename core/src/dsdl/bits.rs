@@ -55,6 +55,28 @@ impl<'a> BitWriter<'a> {
         self.write_uint(u64::from(f16_bits_saturated(v)), 16);
     }
 
+    /// Appends an IEEE-754 binary64.
+    pub fn write_f64(&mut self, v: f64) {
+        self.write_uint(v.to_bits(), 64);
+    }
+
+    /// Appends a `bool`.
+    pub fn write_bool(&mut self, v: bool) {
+        self.write_uint(u64::from(v), 1);
+    }
+
+    /// Appends raw bytes (the writer must be on a byte boundary for them to land whole).
+    pub fn write_bytes(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_uint(u64::from(b), 8);
+        }
+    }
+
+    /// Bits written so far.
+    pub fn bit_len(&self) -> usize {
+        self.bit
+    }
+
     /// Bytes touched so far (the serialized length once writing is done).
     pub fn byte_len(&self) -> usize {
         self.bit.div_ceil(8)
@@ -90,6 +112,21 @@ impl<'a> BitReader<'a> {
         out
     }
 
+    /// Reads `bits` bits (1..=64) as a two's-complement signed integer.
+    pub fn read_int(&mut self, bits: u32) -> i64 {
+        let v = self.read_uint(bits);
+        if bits < 64 && bits > 0 && (v >> (bits - 1)) & 1 == 1 {
+            (v | !((1u64 << bits) - 1)) as i64
+        } else {
+            v as i64
+        }
+    }
+
+    /// Reads a `bool`.
+    pub fn read_bool(&mut self) -> bool {
+        self.read_uint(1) == 1
+    }
+
     /// Skips `bits` bits (void padding).
     pub fn skip(&mut self, bits: u32) {
         self.bit += bits as usize;
@@ -98,6 +135,21 @@ impl<'a> BitReader<'a> {
     /// Advances to the next byte boundary.
     pub fn align(&mut self) {
         self.bit = self.bit.div_ceil(8) * 8;
+    }
+
+    /// Bits consumed so far (may run past the end of the payload: those read as zero).
+    pub fn bit_position(&self) -> usize {
+        self.bit
+    }
+
+    /// Bytes of payload left after the (byte-aligned) position; 0 once past the end.
+    pub fn remaining_bytes(&self) -> usize {
+        self.buf.len().saturating_sub(self.bit.div_ceil(8))
+    }
+
+    /// Reads an IEEE-754 binary64.
+    pub fn read_f64(&mut self) -> f64 {
+        f64::from_bits(self.read_uint(64))
     }
 
     /// Reads an IEEE-754 binary32.

@@ -11,8 +11,12 @@
 //! - **Implicit zero extension**: a payload shorter than the type reads as if padded with zero
 //!   bits; a variable-length array whose length prefix points past the end gets zero elements.
 //! - **Implicit truncation**: bytes past the end of the type are ignored, sealed types included.
-//! - **Rejection**: only a variable-length array prefix over the array's capacity
-//!   ([`DecodeError::ArrayLengthOverCapacity`]).
+//! - **Rejection**: a variable-length array prefix over the array's capacity
+//!   ([`DecodeError::ArrayLengthOverCapacity`]), a union tag past the last member
+//!   ([`DecodeError::UnionTagOutOfRange`]), a delimiter header longer than what remains
+//!   ([`DecodeError::DelimiterHeaderOverPayload`]).
+//! - **Delimited** (non-sealed) composites nested in another type carry a 4-byte length header;
+//!   their body is zero-extended or truncated to their own type independently.
 //! - **`truncated` integers** keep the low bits (`Readiness` 5 → 1; a `uint53` timestamp keeps
 //!   its low 53 bits). Void padding is written as zero and ignored on read.
 //! - **`saturated float16`**: finite values clamp to ±65504 and then round to nearest even; NaN
@@ -23,16 +27,27 @@
 
 mod bits;
 mod dof3rdts;
+mod execute_command;
 mod get_info;
 mod heartbeat;
+mod port_list;
 mod readiness;
+mod register;
 mod vector31;
 
 pub use bits::{f16_bits_saturated, BitReader, BitWriter};
 pub use dof3rdts::{DoF2ndKinematics, DoF3rdDynamics, DoF3rdKinematics, DoF3rdTs, Timestamp};
+pub use execute_command::{
+    ExecuteCommandRequest, ExecuteCommandResponse, EXECUTE_COMMAND_SERVICE_ID,
+};
 pub use get_info::{GetInfoRequest, GetInfoResponse, Version, GET_INFO_SERVICE_ID};
 pub use heartbeat::Heartbeat;
+pub use port_list::{PortList, ServiceIdList, SubjectIdList};
 pub use readiness::Readiness;
+pub use register::{
+    AccessRequest, AccessResponse, BitArray, ListRequest, ListResponse, Name, Value,
+    ACCESS_SERVICE_ID, LIST_SERVICE_ID,
+};
 pub use vector31::Vector31;
 
 /// Why a payload could not be deserialized.
@@ -46,6 +61,20 @@ pub enum DecodeError {
         /// The capacity the DSDL definition allows.
         capacity: usize,
     },
+    /// A union's tag names no member.
+    UnionTagOutOfRange {
+        /// The tag read.
+        tag: u8,
+        /// How many members the union has.
+        members: u8,
+    },
+    /// A delimited composite's header claims more bytes than the payload has left.
+    DelimiterHeaderOverPayload {
+        /// The length the header claimed.
+        length: usize,
+        /// The bytes left after the header.
+        remaining: usize,
+    },
 }
 
 impl core::fmt::Display for DecodeError {
@@ -54,6 +83,16 @@ impl core::fmt::Display for DecodeError {
             DecodeError::ArrayLengthOverCapacity { length, capacity } => write!(
                 f,
                 "array length prefix {length} exceeds the capacity {capacity}"
+            ),
+            DecodeError::UnionTagOutOfRange { tag, members } => {
+                write!(
+                    f,
+                    "union tag {tag} names no member (the union has {members})"
+                )
+            }
+            DecodeError::DelimiterHeaderOverPayload { length, remaining } => write!(
+                f,
+                "delimiter header claims {length} bytes but only {remaining} remain"
             ),
         }
     }

@@ -18,12 +18,20 @@
 //! never, a newer message superseding an unsent one on the same subject, a full queue refusing
 //! (counted) rather than blocking. [`Node::purge_transmit`] empties it, so a stop sequence can put
 //! its last commands first in line.
+//!
+//! Opt-in, in `registry.rs`: `REGISTERS` registers served over `uavcan.register.List`/`Access`
+//! ([`Node::add_register`]; writes reported by [`Node::take_register_change`]),
+//! `uavcan.node.ExecuteCommand` ([`Node::serve_commands`], [`Node::take_command`]) and
+//! `uavcan.node.port.List` every 10 s ([`Node::enable_port_list`]). To accept every Access request
+//! whole, `EXTENT` must be ≥ 515 bytes (see `tests/register_server.rs`).
 
 use core::time::Duration;
 
+mod registry;
 mod status;
 mod tx_queue;
 
+pub use registry::{convert, parse_value, Command, Register, RegisterError, Registry};
 pub use status::{Health, Mode};
 pub use tx_queue::{TxQueue, TxStats};
 
@@ -125,9 +133,15 @@ pub struct NodeStats {
 /// Deadline of heartbeat and GetInfo frames.
 const SERVICE_DEADLINE: Duration = Duration::from_millis(1000);
 
-/// A Cyphal node. See the module documentation.
-pub struct Node<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE: usize>
-{
+/// A Cyphal node. See the module documentation; `REGISTERS` register slots (about 530 bytes
+/// each; none by default) are served as [`registry`](Node::add_register) describes.
+pub struct Node<
+    const PORTS: usize,
+    const SESSIONS: usize,
+    const EXTENT: usize,
+    const QUEUE: usize,
+    const REGISTERS: usize = 0,
+> {
     config: NodeConfig,
     started: Instant,
     next_heartbeat: Instant,
@@ -141,10 +155,17 @@ pub struct Node<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, 
     stats: NodeStats,
     /// The latest time the caller gave.
     now: Instant,
+    /// Registers, commands, port list.
+    services: registry::Services<REGISTERS>,
 }
 
-impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE: usize>
-    Node<PORTS, SESSIONS, EXTENT, QUEUE>
+impl<
+        const PORTS: usize,
+        const SESSIONS: usize,
+        const EXTENT: usize,
+        const QUEUE: usize,
+        const REGISTERS: usize,
+    > Node<PORTS, SESSIONS, EXTENT, QUEUE, REGISTERS>
 {
     /// A node that starts now: its first heartbeat is due immediately.
     pub fn new(config: NodeConfig, now: Instant) -> Self {
@@ -168,6 +189,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
             heartbeat_tid: 0,
             stats: NodeStats::default(),
             now,
+            services: registry::Services::new(),
         }
     }
 
@@ -329,13 +351,17 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     /// Takes one received frame.
     pub fn handle_frame<'s>(&'s mut self, now: Instant, frame: &'s Frame) -> Option<Event<'s>> {
         self.now = self.now.max(now);
-        let get_info = crate::can::CanId::parse(frame.id()).is_some_and(|id| {
-            matches!(id.kind, TransferKind::Request { service_id, .. } if service_id == GET_INFO_SERVICE)
+        let served = crate::can::CanId::parse(frame.id()).is_some_and(|id| {
+            matches!(id.kind, TransferKind::Request { service_id, .. } if registry::is_served(service_id))
         });
-        if get_info {
-            let header = self.rx.accept(frame).ok()??.header;
-            let client = header.source?;
-            self.answer_get_info(now, client, header.transfer_id, header.priority);
+        if served {
+            // GetInfo, and the register and command services when enabled: answered here.
+            let transfer = self.rx.accept(frame).ok()??;
+            let header = transfer.header;
+            let mut buf = [0u8; registry::SERVED_REQUEST_MAX];
+            let n = transfer.payload.len().min(buf.len());
+            buf[..n].copy_from_slice(&transfer.payload[..n]);
+            self.serve(now, &header, &buf[..n]);
             return None;
         }
         let transfer = self.rx.accept(frame).ok()??;
@@ -433,6 +459,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
                 self.next_heartbeat = now + Duration::from_secs(1);
             }
         }
+        self.poll_port_list(now);
         self.queue.pop(now)
     }
 
@@ -441,7 +468,8 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize, const QUEUE
     #[must_use]
     pub fn poll_timeout(&self) -> Option<Instant> {
         if self.queue.is_empty() {
-            Some(self.next_heartbeat)
+            let port_list = self.services.port_list_due();
+            Some(port_list.map_or(self.next_heartbeat, |t| t.min(self.next_heartbeat)))
         } else {
             Some(self.now)
         }
