@@ -75,6 +75,48 @@ pub enum RxError {
     OutOfSessions,
 }
 
+impl RxError {
+    /// Every reason, in the order [`RxStats`] counts them.
+    pub const ALL: [RxError; 10] = [
+        RxError::NotCyphal,
+        RxError::NotSubscribed,
+        RxError::NotForUs,
+        RxError::MissingStart,
+        RxError::BadToggle,
+        RxError::WrongTransferId,
+        RxError::BadCrc,
+        RxError::DuplicateTransfer,
+        RxError::AnonymousMultiFrame,
+        RxError::OutOfSessions,
+    ];
+
+    /// The counter slot of this reason: an exhaustive match, so a new variant does not compile
+    /// until it has a slot (and the assertion below checks [`RxError::ALL`] agrees).
+    const fn index(self) -> usize {
+        match self {
+            RxError::NotCyphal => 0,
+            RxError::NotSubscribed => 1,
+            RxError::NotForUs => 2,
+            RxError::MissingStart => 3,
+            RxError::BadToggle => 4,
+            RxError::WrongTransferId => 5,
+            RxError::BadCrc => 6,
+            RxError::DuplicateTransfer => 7,
+            RxError::AnonymousMultiFrame => 8,
+            RxError::OutOfSessions => 9,
+        }
+    }
+}
+
+// `ALL` lists every slot once, in slot order.
+const _: () = {
+    let mut i = 0;
+    while i < RxError::ALL.len() {
+        assert!(RxError::ALL[i].index() == i);
+        i += 1;
+    }
+};
+
 /// Counters of what the reassembler did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -83,14 +125,14 @@ pub struct RxStats {
     pub frames: u64,
     /// Transfers delivered.
     pub transfers: u64,
-    /// Rejections, indexed like [`RxError`] variants (see [`RxStats::rejected`]).
-    rejected: [u64; 10],
+    /// Rejections, one counter per [`RxError`] (see [`RxStats::rejected`]).
+    rejected: [u64; RxError::ALL.len()],
 }
 
 impl RxStats {
     /// How many frames were rejected for `reason`.
     pub fn rejected(&self, reason: RxError) -> u64 {
-        self.rejected[reason as usize]
+        self.rejected[reason.index()]
     }
 
     /// All rejections.
@@ -192,7 +234,7 @@ impl<const PORTS: usize, const SESSIONS: usize, const EXTENT: usize>
         match &result {
             Ok(Some(_)) => self.stats.transfers += 1,
             Ok(None) => {}
-            Err(e) => self.stats.rejected[*e as usize] += 1,
+            Err(e) => self.stats.rejected[e.index()] += 1,
         }
         result
     }
