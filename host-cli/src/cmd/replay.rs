@@ -15,12 +15,12 @@ pub struct Args {
     /// The candump log (`candump -L` format); `-` for standard input.
     pub file: PathBuf,
     /// Subject-ID of the dynamics feedback (0..=8191).
-    #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID", value_parser = clap::value_parser!(u16).range(0..=8191))]
-    pub feedback_id: u16,
+    #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
+    pub feedback_id: propid_core::can::SubjectId,
     /// Only the feedback of this node-ID (0..=127). Without it, the first node seen on the subject
     /// is used, and a second node there is an error.
-    #[arg(long, value_parser = clap::value_parser!(u8).range(0..=127))]
-    pub source_node: Option<u8>,
+    #[arg(long)]
+    pub source_node: Option<propid_core::can::NodeId>,
     /// Output TSV (standard output if omitted).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
@@ -128,8 +128,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
     };
     let options = ReplayOptions {
-        feedback_id: args.feedback_id,
-        source_node: args.source_node,
+        feedback_id: args.feedback_id.get(),
+        source_node: args.source_node.map(|n| n.get()),
     };
     let out_name = args
         .output
@@ -139,7 +139,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ReplayError::Write(io) => anyhow::Error::new(io).context(format!("writing {out_name}")),
         other => other.into(),
     })?;
-    for line in describe(&summary, &name, args.feedback_id) {
+    for line in describe(&summary, &name, args.feedback_id.get()) {
         eprintln!("{line}");
     }
     if summary.rows == 0 {
