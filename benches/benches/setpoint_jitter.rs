@@ -62,12 +62,11 @@ fn pct(sorted: &[f64], p: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * p).round() as usize]
 }
 
-fn main() {
-    let smoke = std::env::args().any(|a| a == "--test");
-    let seconds: f64 = std::env::args()
-        .filter_map(|a| a.parse().ok())
-        .next()
-        .unwrap_or(if smoke { 0.5 } else { 10.0 });
+/// Runs the drive loop for `seconds` of init phase (setpoints only) and returns the publication
+/// times [s]; with `live`, the live page is served and a viewer reads its event stream.
+fn run_loop(seconds: f64, live: bool) -> Vec<f64> {
+    use std::io::{Read, Write};
+    use std::sync::Arc;
     let (a, _b) = MemoryBus::pair(8);
     let mut rec = Recorder {
         inner: a,
@@ -75,29 +74,79 @@ fn main() {
     };
     // The init phase publishes at the setpoint period like the pattern does; no feedback is
     // needed for it, so the measurement is the loop alone.
-    let cfg = DriveConfig::example(Excitation {
+    let excitation = Excitation {
         lo: 0.1,
         hi: 0.9,
         period: 2.0,
         duration: 0.001,
         init_duration: seconds,
         pattern: Pattern::Sine,
+    };
+    let cfg = DriveConfig::example(excitation);
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut page = live.then(|| {
+        let state = Arc::new(propid::live::LiveState::default());
+        let server = propid::live::serve(
+            "127.0.0.1:0".parse().unwrap(),
+            Arc::clone(&state),
+            Arc::clone(&stop),
+            "bench".into(),
+        )
+        .unwrap();
+        let (addr, token) = (server.addr, server.token.clone());
+        let viewer = std::thread::spawn(move || {
+            let mut s = std::net::TcpStream::connect(addr).unwrap();
+            write!(s, "GET /events?token={token} HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+            let mut buf = vec![0u8; 1 << 16];
+            let mut total = 0;
+            while let Ok(n) = s.read(&mut buf) {
+                if n == 0 {
+                    break;
+                }
+                total += n;
+            }
+            total
+        });
+        (
+            server,
+            propid::live::DriveView::new(state, excitation),
+            viewer,
+        )
     });
     let t0 = Instant::now();
     let _ = run_drive(
         cfg,
         &mut rec,
         &SystemClock,
-        &AtomicBool::new(false),
+        &stop,
         &mut std::io::sink(),
-        &mut |_| {},
+        &mut |e| {
+            if let Some((_, view, _)) = page.as_mut() {
+                view.on_event(e);
+            }
+        },
     );
-    let ours: Vec<f64> = rec
-        .sent
+    if let Some((server, _, viewer)) = page {
+        drop(server);
+        let _ = viewer.join();
+    }
+    rec.sent
         .iter()
         .map(|t| t.duration_since(t0).as_secs_f64())
         .filter(|t| *t < seconds)
-        .collect();
+        .collect()
+}
+
+fn main() {
+    let smoke = std::env::args().any(|a| a == "--test");
+    let seconds: f64 = std::env::args()
+        .filter_map(|a| a.parse().ok())
+        .next()
+        .unwrap_or(if smoke { 0.5 } else { 10.0 });
+    let ours = run_loop(seconds, false);
+    // The same loop with the live page served and a viewer connected to its event stream, fed
+    // from the loop's events (issue 17: the live view must not change the jitter).
+    let with_page = run_loop(seconds, true);
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let seed = std::process::Command::new("python3")
         .arg(root.join("setpoint_jitter/seed_loop.py"))
@@ -111,12 +160,17 @@ fn main() {
         _ => Vec::new(),
     };
     let (jo, js) = (jitter_us(&ours), jitter_us(&theirs));
+    let jl = jitter_us(&with_page);
     println!("setpoint publication jitter |interval − 5 ms| over {seconds} s [µs]:");
     println!(
         "{:<22} {:>8} {:>8} {:>8} {:>8} {:>8}",
         "loop", "n", "p50", "p90", "p99", "max"
     );
-    for (name, j) in [("propid drive", &jo), ("seed asyncio loop", &js)] {
+    for (name, j) in [
+        ("propid drive", &jo),
+        ("  with a live viewer", &jl),
+        ("seed asyncio loop", &js),
+    ] {
         println!(
             "{name:<22} {:>8} {:>8.1} {:>8.1} {:>8.1} {:>8.1}",
             j.len(),

@@ -265,6 +265,8 @@ pub fn fit_path_with(
         // every memory-mapping reader accepts, and the file is read once, start to end.
         let map = unsafe { memmap2::Mmap::map(&file) }
             .map_err(|e| InputError(format!("{name}: cannot map: {e}")))?;
+        // Read-ahead hint (Unix only; elsewhere the OS's default is fine).
+        #[cfg(unix)]
         let _ = map.advise(memmap2::Advice::Sequential);
         Some(map)
     };

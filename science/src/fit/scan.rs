@@ -9,7 +9,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use memmap2::{Mmap, UncheckedAdvice};
+use memmap2::Mmap;
 use propid_core::estimate::LoadEstimator;
 use propid_io::tsv::{Layout, RowError};
 
@@ -89,7 +89,9 @@ pub(super) fn lines(
 
 /// Drops the pages of `map[from..to]` from this process (they are read again from the page cache
 /// if touched again): keeps the peak RSS of a scan of a file larger than memory bounded.
+#[cfg(unix)]
 pub(super) fn release(map: Option<&Mmap>, from: usize, to: usize) {
+    use memmap2::UncheckedAdvice;
     if let Some(map) = map {
         if to > from {
             // SAFETY: `map` is a read-only MAP_SHARED mapping of a regular file (memmap2's
@@ -103,6 +105,10 @@ pub(super) fn release(map: Option<&Mmap>, from: usize, to: usize) {
         }
     }
 }
+
+/// Elsewhere the pages stay mapped until the map is dropped (no `madvise`).
+#[cfg(not(unix))]
+pub(super) fn release(_map: Option<&Mmap>, _from: usize, _to: usize) {}
 
 /// Scans `data[start..end]` (whole lines). Errors carry the local line.
 pub(super) fn scan(
