@@ -96,6 +96,8 @@ fn run_loop(seconds: f64, live: bool) -> Vec<f64> {
         let (addr, token) = (server.addr, server.token.clone());
         let viewer = std::thread::spawn(move || {
             let mut s = std::net::TcpStream::connect(addr).unwrap();
+            // The stream stays open after the server stops; a quiet second ends the viewer.
+            s.set_read_timeout(Some(Duration::from_secs(1))).unwrap();
             write!(s, "GET /events?token={token} HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
             let mut buf = vec![0u8; 1 << 16];
             let mut total = 0;
