@@ -561,25 +561,6 @@ pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), TsvError> 
 /// Reads every complete row of a TSV (rows with a non-finite t, force, velocity or acceleration
 /// are skipped and counted).
 pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), TsvError> {
-    let name = path.display().to_string();
-    let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
-            source_name: name.clone(),
-            line: 0,
-            source: e,
-        })?;
-        Box::new(std::io::BufReader::new(f))
-    };
-    let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;
-    let (mut out, mut skipped) = (Vec::new(), 0);
-    while let Some(row) = reader.next_row()? {
-        if row.sample.is_finite() {
-            out.push(row.sample);
-        } else {
-            skipped += 1;
-        }
-    }
-    Ok((out, skipped))
+    let (rows, skipped) = read_rows(path)?;
+    Ok((rows.into_iter().map(|r| r.sample).collect(), skipped))
 }
