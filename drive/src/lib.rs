@@ -32,7 +32,9 @@
 
 pub mod drive;
 pub mod realtime;
+pub mod registers;
 pub mod sim_drive;
+pub mod telega;
 pub mod virtual_link;
 
 use propid_core::can::Frame;
@@ -41,8 +43,9 @@ use propid_core::node::Node;
 use propid_core::time::Instant;
 use propid_io::tsv::Sample;
 
-/// The node type of the host tools: 8 ports, 16 sessions, 512-byte transfers, 256 queued frames.
-pub type HostNode = Node<8, 16, 512, 256>;
+/// The node type of the host tools: 8 ports, 16 sessions, 515-byte transfers (a whole
+/// `uavcan.register.Access` request), 256 queued frames, [`registers::HOST_REGISTERS`] registers.
+pub type HostNode = Node<8, 16, 515, 256, { registers::HOST_REGISTERS }>;
 
 /// A Sans-IO machine that [`realtime::run_realtime`] and [`virtual_link`] can drive.
 pub trait Machine {
