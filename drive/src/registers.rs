@@ -397,7 +397,7 @@ impl std::fmt::Display for Problem {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} is {}; it must be {} ({})",
+            "{} is {}; set it to {} ({})",
             self.register, self.found, self.wanted, self.why
         )
     }
