@@ -54,6 +54,8 @@ pub struct RemoteRegister {
 }
 
 /// One thing for the [`Client`] to do.
+// A handful are queued at a time; boxing the value would only add an allocation.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum Op {
     /// Listen for heartbeats this long.
@@ -69,6 +71,7 @@ pub enum Op {
 }
 
 /// What one [`Op`] came to.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug, PartialEq)]
 pub enum ClientEvent {
     /// The nodes heard so far (sorted), after [`Op::Listen`].
