@@ -40,6 +40,10 @@ pub struct Args {
     /// configuration would spoil the data (see `propid telega`).
     #[arg(long, value_name = "NODE")]
     pub from_telega: Option<NodeId>,
+    /// Print the registers (defaults, file, environment and flags applied and checked) in the
+    /// register file's format, and exit without opening the bus.
+    #[arg(long)]
+    pub show_registers: bool,
     /// Subject-ID of the readiness publisher; no readiness is published when unset
     /// (uavcan.pub.readiness.id, UAVCAN__PUB__READINESS__ID).
     #[arg(long)]
@@ -338,6 +342,10 @@ fn save_written(
 /// Runs `propid drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (mut cfg, mut file_registers) = args.config()?;
+    if args.show_registers {
+        print!("{}", registers::render_file(&file_registers));
+        return Ok(());
+    }
     let mut transport = args.bus.open()?;
     if let Some(node) = args.from_telega {
         let ports =
