@@ -100,7 +100,9 @@ fn bad_values_are_refused_naming_origin_and_register() {
         ("UAVCAN__PUB__SP_RAT__ID", "24"),
         ("UAVCAN__SUB__FB_DYN__ID", "110"),
     ];
-    let cases: Vec<(&str, Vec<(&str, &str)>, Vec<&str>)> = vec![
+    // (register file, environment, what the error must say)
+    type Case<'a> = (&'a str, Vec<(&'a str, &'a str)>, Vec<&'a str>);
+    let cases: Vec<Case> = vec![
         (
             "uavcan.node.id: 10\n\nperiod: fast\n",
             vec![],
