@@ -194,7 +194,10 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
     let cases: [(&[(&str, &str)], &str); 4] = [
         (&[("SETPOINT_RAT_LO_HI", "0.9 0.1")], "lo < hi"),
         (&[("SETPOINT_RAT_LO_HI", "0.1 1.5")], "lo < hi ≤ 1"),
-        (&[("UAVCAN__SUB__FB_DYN__ID", "")], "feedback id is not set"),
+        (
+            &[("UAVCAN__SUB__FB_DYN__ID", "")],
+            "--feedback-id (register uavcan.sub.fb_dyn.id, UAVCAN__SUB__FB_DYN__ID) is not set",
+        ),
         (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
     ];
     for (env, want) in cases {
