@@ -285,3 +285,82 @@ fn propid_telega_configures_a_pycyphal_register_server() {
         "{held}"
     );
 }
+
+#[test]
+#[ignore = "needs yakut, pycyphal and socat"]
+fn telega_fixes_the_simulated_drive_then_drive_runs_on_its_port_ids() {
+    // Discover, check, configure, drive, STANDBY: the simulated Telega starts at 20 Hz without
+    // local timestamps, on feedback subject 111.
+    let p = Ptys::new();
+    let sim = Command::new(env!("CARGO_BIN_EXE_propid"))
+        .args(["sim-drive", "--iface", &Ptys::iface(&p.b)])
+        .args(["--interval", "0.05", "--local-timestamp", "false"])
+        .args(["--feedback-id", "111", "--readiness-id", "10"])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let iface = Ptys::iface(&p.a);
+    let propid = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_propid"))
+            .args(args)
+            .args(["--iface", &iface])
+            .env_remove("UAVCAN__NODE__ID")
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        eprintln!("propid {args:?}:\n{text}");
+        (out.status.code(), text)
+    };
+    // Refused before engaging: the drive's configuration would spoil the data.
+    let (code, text) = propid(&[
+        "drive",
+        "--node-id",
+        "10",
+        "--from-telega",
+        "42",
+        "-o",
+        "/dev/null",
+    ]);
+    assert_ne!(code, Some(0), "{text}");
+    assert!(text.contains("not engaging it"), "{text}");
+    assert!(text.contains("mns.pub_interval_min is 0.05"), "{text}");
+    let (code, text) = propid(&["telega"]);
+    assert_eq!(code, Some(1), "{text}");
+    let (code, text) = propid(&["telega", "--fix", "--store"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("stored"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("run.tsv");
+    let (code, text) = propid(&[
+        "drive",
+        "--node-id",
+        "10",
+        "--from-telega",
+        "42",
+        "--init-duration",
+        "0.5",
+        "--pattern-duration",
+        "3",
+        "--setpoint-period",
+        "0.02",
+        "--progress=false",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, Some(0), "{text}");
+    assert!(text.contains("publishes feedback on 111"), "{text}");
+    assert!(text.contains("STANDBY and a zero setpoint sent"), "{text}");
+    let rows = std::fs::read_to_string(&tsv).unwrap().lines().count() - 1;
+    // 3 s at 200 Hz after the fix (at 20 Hz it would be 60).
+    assert!(rows >= 500, "{rows} rows");
+    let out = interrupt(sim);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("last readiness STANDBY, last setpoint 0"),
+        "{err}"
+    );
+}
