@@ -181,6 +181,10 @@ fn boot_node(cfg: &SimDriveConfig, registers: &HostRegistry, now: Instant) -> Ho
         let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
     }
     crate::registers::serve(&mut node, registers, &SIM_COMMANDS, now);
+    // An interval the simulation cannot use is refused in the answer itself.
+    let _ = node
+        .registers_mut()
+        .set_limits(PUB_INTERVAL_MIN, INTERVAL_RANGE.0, INTERVAL_RANGE.1);
     node
 }
 
