@@ -27,6 +27,12 @@
 //! commands left. [`virtual_link`] runs two machines against each other on a modelled CAN link in
 //! virtual time, so the seed's 200 s run is a deterministic test of well under a second.
 //!
+//! Both serve registers ([`registers`]): the drive the seed's PyCyphal names (built from defaults,
+//! a register file, the environment and flags), the simulated Telega Telega's (`mns.*`,
+//! `uavcan.pub.dynamics.id`, …), which it obeys. [`telega::Client`] is a third machine, a Cyphal
+//! client on the core `Node` that discovers drives and reads, writes and stores their registers
+//! (what `propid telega` runs on the bus, and the tests run against `SimDrive` in virtual time).
+//!
 //! The library never prints: progress reaches the caller as events.
 #![deny(missing_docs)]
 
