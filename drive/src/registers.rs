@@ -64,7 +64,7 @@ pub const TELEGA_FEEDBACK_ID: &str = "uavcan.pub.dynamics.id";
 pub const TELEGA_SETPOINT_ID: &str = "uavcan.sub.setpoint_r_torq.id";
 /// Telega's readiness subscription register.
 pub const TELEGA_READINESS_ID: &str = "uavcan.sub.readiness.id";
-/// Telega's minimum feedback publication interval [s].
+/// Telega's minimum feedback publication interval, in seconds.
 pub const PUB_INTERVAL_MIN: &str = "mns.pub_interval_min";
 /// Telega's switch for timestamping feedback with its own clock.
 pub const LOCAL_TIMESTAMP: &str = "mns.local_timestamp";
@@ -207,7 +207,7 @@ pub fn normalize_bool(text: &str) -> &str {
     }
 }
 
-/// "natural16[1]", "real64[2]", "string", ….
+/// The type as `natural16[1]`, `real64[2]`, `string`, …
 pub fn describe(v: &Value) -> String {
     if v.is_numeric() {
         format!("{}[{}]", v.type_name(), v.len())

@@ -233,7 +233,7 @@ impl SimDrive {
         self.node.registers()
     }
 
-    /// The feedback interval now [s].
+    /// The feedback interval now, in seconds.
     pub fn interval(&self) -> f64 {
         self.interval.as_secs_f64()
     }
