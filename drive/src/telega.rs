@@ -526,14 +526,17 @@ impl<'a> BlockingClient<'a> {
         self.read(server, &CHECKED_REGISTERS)
     }
 
-    /// Reads `names` from `server` (those it lacks are left out).
+    /// Reads `names` from `server` (those it lacks are left out). A server that does not answer
+    /// the first read is not asked again (a node without registers costs one timeout, not one
+    /// per name).
     pub fn read(&mut self, server: NodeId, names: &[&str]) -> Result<Vec<(String, Value)>, String> {
         let mut out = Vec::new();
-        for name in names {
-            if let Some(r) = self.access(server, name, Value::Empty)? {
-                if !r.value.is_empty() {
-                    out.push((name.to_string(), r.value));
-                }
+        for (i, name) in names.iter().enumerate() {
+            match self.access(server, name, Value::Empty)? {
+                Some(r) if !r.value.is_empty() => out.push((name.to_string(), r.value)),
+                Some(_) => {}
+                None if i == 0 => break,
+                None => {}
             }
         }
         Ok(out)
