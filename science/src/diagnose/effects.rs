@@ -661,11 +661,10 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
         | EffectKind::ForceOffset
         | EffectKind::BrakingTorque => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
         EffectKind::TimeBase => (e.param, f64::NAN),
-        EffectKind::ForceSensorLag => (
-            held_input_lag(fit.theta[col] / t0, s.rate),
-            fit.stderr[col] / t0.abs(),
-        ),
-        EffectKind::AccelerationLag => (held_input_lag(fit.theta[col], s.rate), fit.stderr[col]),
+        // The derivative's coefficient is the time constant itself: the slopes are centred and
+        // a drive's signals are continuous between samples (no half-sample correction).
+        EffectKind::ForceSensorLag => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
+        EffectKind::AccelerationLag => (fit.theta[col], fit.stderr[col]),
         EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => {
             let (a, b) = (fit.theta[col], fit.theta[col + 1]);
             let amp = (a * a + b * b).sqrt();
@@ -692,21 +691,6 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
             (q, se)
         }
     }
-}
-
-/// The time constant L of a first-order lag from the coefficient c of the derivative that
-/// inverts it, for an input held between samples (a drive's torque follows a setpoint that changes
-/// once per sample, so the sensor sees a staircase). The exact inverse of the sampled lag,
-/// x_k = y_k + (1/α − 1)(y_k − y_{k−1}) with α = 1 − e^{−Δt/L}, has 1/α − 1 = L/Δt − ½ + Δt/(12L) + …,
-/// so c = L − Δt/2 + Δt²/(12L): the derivative's coefficient is short by half a sample. (Read
-/// as L it would be 17 % short for a 12 ms lag at 250 Hz.)
-fn held_input_lag(c: f64, rate: f64) -> f64 {
-    let dt = 1.0 / rate;
-    let l0 = c + 0.5 * dt;
-    if l0 <= 0.0 {
-        return c;
-    }
-    c + 0.5 * dt - dt * dt / (12.0 * l0)
 }
 
 fn fit_on_all(model: &Model, s: &Signals) -> Option<Fit> {

@@ -156,16 +156,26 @@ impl Signals {
         self.t.len()
     }
 
-    /// The reported torque through a causal first-order lag of time constant `lag`.
+    /// The reported torque through a causal first-order lag of time constant `lag`, discretised
+    /// with a first-order hold (the torque taken as linear between samples, exact for a
+    /// continuous torque; a zero-order hold would apply each sample over the interval before it
+    /// and make every fitted lag half a sample long).
     pub fn lagged_force(&self, lag: f64) -> Vec<f64> {
-        let mut y = self.force[0];
         let mut out = Vec::with_capacity(self.len());
-        for i in 0..self.len() {
-            if i > 0 && lag > 0.0 {
-                let dt = self.t[i] - self.t[i - 1];
-                y += (1.0 - (-dt / lag).exp()) * (self.force[i] - y);
-            } else if lag <= 0.0 {
-                y = self.force[i];
+        if lag <= 0.0 {
+            out.extend_from_slice(&self.force);
+            return out;
+        }
+        let mut y = self.force[0];
+        out.push(y);
+        for i in 1..self.len() {
+            let dt = self.t[i] - self.t[i - 1];
+            let (x0, x1) = (self.force[i - 1], self.force[i]);
+            if dt > 0.0 {
+                // y' = (x − y)/L with x linear from x0 to x1 over dt, solved exactly.
+                let e = (-dt / lag).exp();
+                let slope = (x1 - x0) / dt;
+                y = x1 - lag * slope + e * (y - x0 + lag * slope);
             }
             out.push(y);
         }
