@@ -27,7 +27,9 @@ use serialport::{SerialPort, TTYPort};
 static REAL_TIME: Mutex<()> = Mutex::new(());
 
 fn real_time_turn() -> std::sync::MutexGuard<'static, ()> {
-    REAL_TIME.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    REAL_TIME
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 fn sim_cfg() -> SimDriveConfig {

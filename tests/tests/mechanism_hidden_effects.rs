@@ -61,7 +61,7 @@ fn run(s: &Scenario, p: Pattern, seed: u64) -> Report {
         Pattern::Chirp => s.simulate(pattern::chirp(b.lo, b.hi, PERIOD, b.duration), seed),
     }
     .expect("scenario simulates");
-    diagnose_rows(&rows(&records), Options::default()).expect("diagnosis runs")
+    diagnose_rows(rows(&records), Options::default()).expect("diagnosis runs")
 }
 
 fn describe(r: &Report) -> String {
