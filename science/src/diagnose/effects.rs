@@ -1339,7 +1339,8 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
         .and_then(|f| concentration(s, &residuals(&model, &f, s), test.clone()));
     let (f_peak, ratio) = periodogram(s, &r_ext);
     let mut unexplained = None;
-    if ratio > 40.0 {
+    // After an ambiguity the structure is explained, twice over: not "unexplained".
+    if ratio > 40.0 && ambiguity.is_none() {
         let probe = model.with(Effect {
             kind: EffectKind::PeriodicDisturbance,
             param: f_peak,
