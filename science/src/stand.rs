@@ -290,6 +290,9 @@ impl Stand {
                 self.set_setpoint(excitation.setpoint(0.5 * (self.time + step_end) - start));
                 self.advance_to(step_end);
             }
+            // The demand at the sampling instant (the first sample included: it belongs to
+            // the pattern, not to the init phase).
+            self.set_setpoint(excitation.setpoint(t));
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();

@@ -773,12 +773,26 @@ fn base_model_of(fit: &Fit, model: &Model, s: &Signals) -> BaseModel {
         .iter()
         .position(|e| e.kind == EffectKind::ViscousFriction)
         .map_or(0.0, |i| effect_value(model, i, fit, s).0);
-    BaseModel {
+    let quadratic = BaseModel {
         mass,
         c1,
         c2,
         mass_stderr: fit.stderr[0] * mass * mass,
         c2_stderr: ((fit.stderr[1] / t0).powi(2) + (c2 * fit.stderr[0] / t0).powi(2)).sqrt(),
+        k: None,
+        p: None,
+    };
+    // With a drag exponent the second coefficient is k of k·|ω|^p, not c2.
+    match model
+        .effects
+        .iter()
+        .find(|e| e.kind == EffectKind::DragExponent)
+    {
+        Some(e) => {
+            let (k, k_stderr) = (quadratic.c2, quadratic.c2_stderr);
+            quadratic.power_law(k, k_stderr, e.param, super::rms(&s.velocity))
+        }
+        None => quadratic,
     }
 }
 
@@ -1262,9 +1276,13 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
         // (the rival's gain within AMBIGUOUS of the winner's, and the winner better in fewer
         // than MIN_FOLDS_BETTER folds) are not told apart by these data: say so, with both
         // estimates, and name neither (lags among themselves were settled above).
+        // The same when the winner is better in most folds but the held-out simulation prefers
+        // the rival: the two held-out criteria disagree (on the seed's sinusoid a 3 mN·m Coulomb
+        // friction gained 85.25 % against a 17.5 ms torque lag's 85.73 %, the lag better in 5 of
+        // 5 folds by that sliver, while the simulation preferred the friction, 83.4 % vs 80.8 %).
         if let Some(rival) = passing.iter().skip(1).find(|p| {
             p.2 >= (1.0 - AMBIGUOUS) * passing[0].2
-                && fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER
+                && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER || p.4 > passing[0].4)
                 && !(is_lag(p.3) && is_lag(passing[0].3))
         }) {
             let (a, b) = (&candidates[passing[0].3], &candidates[rival.3]);
@@ -1321,7 +1339,8 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
         .and_then(|f| concentration(s, &residuals(&model, &f, s), test.clone()));
     let (f_peak, ratio) = periodogram(s, &r_ext);
     let mut unexplained = None;
-    if ratio > 40.0 {
+    // After an ambiguity the structure is explained, twice over: not "unexplained".
+    if ratio > 40.0 && ambiguity.is_none() {
         let probe = model.with(Effect {
             kind: EffectKind::PeriodicDisturbance,
             param: f_peak,

@@ -97,12 +97,32 @@ pub struct BaseModel {
     pub mass: f64,
     /// Viscous coefficient (0: the seed's default bound).
     pub c1: f64,
-    /// Drag coefficient [N·m·s²/rad²].
+    /// Drag coefficient of the quadratic law c2·ω|ω| [N·m·s²/rad²], always: for a drag law
+    /// k·|ω|^p (`drag_exponent` named) it is the c2 whose quadratic torque equals k·|ω|^p at the
+    /// data's RMS speed, and `k` and `p` hold the law itself.
     pub c2: f64,
     /// Standard error of J.
     pub mass_stderr: f64,
     /// Standard error of c2.
     pub c2_stderr: f64,
+    /// k of a drag law k·|ω|^p [N·m·(s/rad)^p] (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// p of a drag law k·|ω|^p (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p: Option<f64>,
+}
+
+impl BaseModel {
+    /// A drag law k·|ω|^p as its quadratic-equivalent c2 at the RMS speed `w_rms`.
+    pub(crate) fn power_law(mut self, k: f64, k_stderr: f64, p: f64, w_rms: f64) -> BaseModel {
+        let scale = w_rms.powf(p - 2.0);
+        self.c2 = k * scale;
+        self.c2_stderr = k_stderr * scale;
+        self.k = Some(k);
+        self.p = Some(p);
+        self
+    }
 }
 
 /// A named effect with its estimated parameter.
@@ -491,6 +511,8 @@ impl Report {
             c2: f64::NAN,
             mass_stderr: f64::NAN,
             c2_stderr: f64::NAN,
+            k: None,
+            p: None,
         };
         Report {
             verdict: Verdict::CannotJudge { reasons },
@@ -552,6 +574,11 @@ impl Report {
     }
 }
 
+/// Root mean square of `x`.
+pub(crate) fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
+}
+
 fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     let mut effects = Vec::new();
     if law.selected {
@@ -579,9 +606,10 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
         samples: n,
         duration_s: s.t[n - 1] - s.t[0],
         rate_hz: s.rate,
-        base: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.c2, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        base: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.c2, mass_stderr: f64::NAN, c2_stderr: f64::NAN, k: None, p: None },
         effects,
-        extended: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.k, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        extended: BaseModel { mass: f64::NAN, c1: 0.0, c2: f64::NAN, mass_stderr: f64::NAN, c2_stderr: f64::NAN, k: None, p: None }
+            .power_law(law.k, f64::NAN, law.exponent, rms(&s.velocity)),
         simulation_rms: SimulationRms {
             base: law.rms_seed,
             extended: law.rms_extended,
