@@ -289,3 +289,62 @@ fn coulomb_friction_on_the_seeds_sine_is_ambiguous_not_a_lag() {
         assert!(r.unexplained.is_none(), "seed {seed}: {:?}", r.unexplained);
     }
 }
+
+/// The progress callback sees the base model, every candidate of every round (counted up to the
+/// round's size, whatever thread tried it) and the extended model, in that order.
+#[test]
+fn progress_reports_every_stage_in_order() {
+    use propid_science::diagnose::{diagnose_rows_observed, Stage};
+    use std::sync::Mutex;
+    let excitation = Excitation {
+        lo: 0.1,
+        hi: 0.9,
+        period: 2.0,
+        duration: 20.0,
+        init_duration: 1.0,
+        pattern: Pattern::Chirp,
+    };
+    let stand = StandConfig {
+        torque_lag: 0.01,
+        ..StandConfig::default()
+    };
+    let rows: Vec<propid_io::tsv::Row> = simulate(stand, &excitation, 9)
+        .into_iter()
+        .map(|sample| propid_io::tsv::Row {
+            ts_local: f64::NAN,
+            sample,
+        })
+        .collect();
+    let seen = Mutex::new(Vec::new());
+    let report = diagnose_rows_observed(rows, Options::default(), &|stage| {
+        seen.lock().unwrap().push(stage)
+    })
+    .unwrap();
+    let seen = seen.into_inner().unwrap();
+    assert_eq!(seen.first(), Some(&Stage::Base), "{seen:?}");
+    assert_eq!(seen.last(), Some(&Stage::Extended), "{seen:?}");
+    let rounds = report.effects.len() + 1;
+    for round in 1..=rounds.min(Options::default().max_effects) {
+        let of = seen
+            .iter()
+            .find_map(|s| match s {
+                Stage::Candidates { round: r, of, .. } if *r == round => Some(*of),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("round {round} not reported: {seen:?}"));
+        let done: Vec<usize> = seen
+            .iter()
+            .filter_map(|s| match s {
+                Stage::Candidates { round: r, done, .. } if *r == round => Some(*done),
+                _ => None,
+            })
+            .collect();
+        let mut sorted = done.clone();
+        sorted.sort_unstable();
+        assert_eq!(
+            sorted,
+            (0..=of).collect::<Vec<_>>(),
+            "round {round}: {done:?}"
+        );
+    }
+}
