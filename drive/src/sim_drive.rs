@@ -417,6 +417,14 @@ impl SimDrive {
                 ..
             }) if subject_id == setpoint_id => {
                 if let Ok(v) = Vector31::deserialize(payload) {
+                    // A drive applies a setpoint when it arrives: the load runs up to this instant
+                    // on the previous one. (Applying it only at the next feedback instant, over
+                    // the whole interval before it, made the torque lead the reported force by
+                    // about half a feedback interval and every lag read from the data short.)
+                    let t = now.saturating_duration_since(self.start).as_secs_f64();
+                    if t > self.stand.time() {
+                        self.stand.advance_to(t);
+                    }
                     self.setpoint = f64::from(v.value[0]);
                     self.summary.last_setpoint = Some(v.value[0]);
                     self.summary.setpoints += 1;
