@@ -2,8 +2,9 @@
 # Installs what the tests need on a fresh machine (called by .ci/run before the test command).
 set -euo pipefail
 # The seed regressor (tests compare propid fit with it) and PyCyphal, the reference stack the
-# interop test talks to over SLCAN.
-python3 -m pip install --quiet --disable-pip-version-check numpy scipy pandas 'pycyphal[transport-can-pythoncan]==1.27.1'
+# interop test talks to over SLCAN; Yakut, the reference Cyphal CLI the register tests drive
+# (ci/steps/80-yakut.sh).
+python3 -m pip install --quiet --disable-pip-version-check numpy scipy pandas 'pycyphal[transport-can-pythoncan]==1.27.1' 'yakut==0.14.2'
 # socat: the pseudo-terminal pair of the interop test; bc and GNU time: benches/compare_fit.sh.
 if command -v apt-get >/dev/null; then
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq socat bc time >/dev/null

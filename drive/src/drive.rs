@@ -21,7 +21,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
-use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Vector31};
+use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Value, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig, TxStats};
 use propid_core::time::Instant;
@@ -30,6 +30,7 @@ use propid_science::excitation::Excitation;
 use propid_transport::CanTransport;
 
 use crate::realtime::{run_realtime, Clock, RunOutcome};
+use crate::registers::{drive_registers, HostRegistry};
 use crate::{ends_transfer, sample_of, subject_of, HostNode, Machine, StopReason};
 
 /// How many times the stop command (STANDBY + zero setpoint) is queued.
@@ -52,7 +53,8 @@ pub struct ConfigError {
 }
 
 impl ConfigError {
-    pub(crate) fn new(setting: &'static str, problem: impl Into<String>) -> Self {
+    /// The error for `setting`.
+    pub fn new(setting: &'static str, problem: impl Into<String>) -> Self {
         ConfigError {
             setting,
             problem: problem.into(),
@@ -254,6 +256,15 @@ pub enum DriveEvent {
     Stopping(StopReason),
     /// The stop sequence ended; the machine does nothing more.
     Stopped(StopReport),
+    /// A register was written over the bus (`uavcan.register.Access`). The run goes on with the
+    /// values it started with, as the seed's PyCyphal node does: the new value takes effect on
+    /// the next run (the caller may store it in its register file).
+    RegisterWritten {
+        /// The register.
+        name: String,
+        /// Its new value.
+        value: Value,
+    },
 }
 
 /// A cheap copy of the drive's state for a live view.
@@ -316,9 +327,16 @@ pub struct Drive {
 }
 
 impl Drive {
-    /// A drive that starts now, in the init phase. `cfg` must have passed
-    /// [`DriveConfig::validate`].
+    /// A drive that starts now, in the init phase, serving the seed's registers with `cfg`'s
+    /// values. `cfg` must have passed [`DriveConfig::validate`].
     pub fn new(cfg: DriveConfig, now: Instant) -> Self {
+        let registers = drive_registers(&cfg, false);
+        Drive::with_registers(cfg, &registers, now)
+    }
+
+    /// A drive that starts now and serves `registers` (List, Access, port.List every 10 s), as
+    /// [`crate::registers`] builds them. `cfg` must have passed [`DriveConfig::validate`].
+    pub fn with_registers(cfg: DriveConfig, registers: &HostRegistry, now: Instant) -> Self {
         let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
         let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", mtu);
         node_config.software_version.minor = 1;
@@ -329,6 +347,7 @@ impl Drive {
             SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID),
             Heartbeat::EXTENT_BYTES,
         );
+        crate::registers::serve(&mut node, registers, &[], now);
         let init_end = now + Duration::from_secs_f64(cfg.excitation.init_duration);
         Drive {
             drive_id: cfg.drive_node_id,
@@ -362,6 +381,11 @@ impl Drive {
     /// The configuration.
     pub fn config(&self) -> &DriveConfig {
         &self.cfg
+    }
+
+    /// The registers it serves (with the values written over the bus).
+    pub fn registers(&self) -> &HostRegistry {
+        self.node.registers()
     }
 
     /// Where the run is.
@@ -637,6 +661,14 @@ impl Drive {
                 }
             }
         }
+        while let Some(i) = self.node.take_register_change() {
+            if let Some(r) = self.node.registers().by_index(i) {
+                self.events.push_back(DriveEvent::RegisterWritten {
+                    name: r.name.as_str().unwrap_or_default().to_string(),
+                    value: r.value.clone(),
+                });
+            }
+        }
         if let Some((src, uptime)) = heartbeat {
             if self.drive_id == Some(src) {
                 if let Some(before) = self.drive_uptime.filter(|b| uptime < *b) {
@@ -836,7 +868,19 @@ pub fn run_drive(
     out: &mut dyn Write,
     on_event: &mut dyn FnMut(&DriveEvent),
 ) -> DriveOutcome {
-    let mut drive = Drive::new(cfg, clock.now());
+    let drive = Drive::new(cfg, clock.now());
+    run_drive_machine(drive, transport, clock, stop, out, on_event)
+}
+
+/// [`run_drive`] for a [`Drive`] built by the caller (e.g. with [`Drive::with_registers`]).
+pub fn run_drive_machine(
+    mut drive: Drive,
+    transport: &mut dyn CanTransport,
+    clock: &dyn Clock,
+    stop: &AtomicBool,
+    out: &mut dyn Write,
+    on_event: &mut dyn FnMut(&DriveEvent),
+) -> DriveOutcome {
     let mut out = Some(out);
     let mut writer: Option<TsvWriter<&mut dyn Write>> = None;
     let mut report = None;

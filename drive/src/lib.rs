@@ -27,12 +27,20 @@
 //! commands left. [`virtual_link`] runs two machines against each other on a modelled CAN link in
 //! virtual time, so the seed's 200 s run is a deterministic test of well under a second.
 //!
+//! Both serve registers ([`registers`]): the drive the seed's PyCyphal names (built from defaults,
+//! a register file, the environment and flags), the simulated Telega Telega's (`mns.*`,
+//! `uavcan.pub.dynamics.id`, …), which it obeys. [`telega::Client`] is a third machine, a Cyphal
+//! client on the core `Node` that discovers drives and reads, writes and stores their registers
+//! (what `propid telega` runs on the bus, and the tests run against `SimDrive` in virtual time).
+//!
 //! The library never prints: progress reaches the caller as events.
 #![deny(missing_docs)]
 
 pub mod drive;
 pub mod realtime;
+pub mod registers;
 pub mod sim_drive;
+pub mod telega;
 pub mod virtual_link;
 
 use propid_core::can::Frame;
@@ -41,8 +49,9 @@ use propid_core::node::Node;
 use propid_core::time::Instant;
 use propid_io::tsv::Sample;
 
-/// The node type of the host tools: 8 ports, 16 sessions, 512-byte transfers, 256 queued frames.
-pub type HostNode = Node<8, 16, 512, 256>;
+/// The node type of the host tools: 8 ports, 16 sessions, 515-byte transfers (a whole
+/// `uavcan.register.Access` request), 256 queued frames, [`registers::HOST_REGISTERS`] registers.
+pub type HostNode = Node<8, 16, 515, 256, { registers::HOST_REGISTERS }>;
 
 /// A Sans-IO machine that [`realtime::run_realtime`] and [`virtual_link`] can drive.
 pub trait Machine {

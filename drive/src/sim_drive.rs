@@ -6,6 +6,13 @@
 //!                           ─► Node::publish ─► poll_transmit
 //!  deadman: no setpoint for SIM_DEADMAN ⇒ zero torque
 //!  heartbeat 1 Hz with its uptime (a new SimDrive is a rebooted drive)
+//!  registers (Telega's names, see crate::registers): List/Access, port.List every 10 s
+//!    mns.pub_interval_min written ─► the feedback interval changes at once
+//!    mns.local_timestamp written  ─► feedback stamped with the drive's clock, or 0 (unknown)
+//!    uavcan.*.id written          ─► kept; takes effect at the next restart (ExecuteCommand
+//!                                    RESTART), as the Cyphal specification and Telega do
+//!  ExecuteCommand: RESTART (a reboot: new node, uptime from 0, port-IDs from the registers),
+//!                  STORE_PERSISTENT_STATES (acknowledged; values survive a RESTART)
 //! ```
 //! It runs the same stand model as `propid sim` (`propid_science::stand::Stand`).
 
@@ -14,7 +21,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
-use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
+use propid_core::dsdl::{DataType, DoF3rdTs, ExecuteCommandRequest, Readiness, Value, Vector31};
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
 use propid_science::stand::{Stand, StandConfig};
@@ -23,6 +30,10 @@ use propid_transport::CanTransport;
 
 use crate::drive::{check_mtu, check_range, ConfigError, DAY};
 use crate::realtime::{run_realtime, Clock};
+use crate::registers::{
+    sim_drive_registers, subject_register, HostRegistry, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN,
+    TELEGA_FEEDBACK_ID, TELEGA_READINESS_ID, TELEGA_SETPOINT_ID,
+};
 use crate::{HostNode, Machine, StopReason};
 
 /// The simulated drive zeroes its torque when no setpoint arrived for this long.
@@ -92,6 +103,10 @@ pub struct SimDriveSummary {
     pub setpoints: u64,
     /// Feedback messages published.
     pub feedback_published: u64,
+    /// Restarts commanded over the bus.
+    pub restarts: u64,
+    /// Store commands received.
+    pub stores: u64,
 }
 
 /// What the simulated drive reports.
@@ -101,6 +116,18 @@ pub enum SimDriveEvent {
     Feedback(DoF3rdTs),
     /// The readiness received changed.
     Readiness(u8),
+    /// A register was written over the bus and now holds `value` (a refused value, such as a
+    /// non-positive interval, is put back and reported with the value kept).
+    RegisterWritten {
+        /// The register.
+        name: String,
+        /// What it holds now.
+        value: Value,
+    },
+    /// It restarted on command: a new node (uptime from 0) with the port-IDs of its registers.
+    Restarted,
+    /// It was asked to store its registers.
+    Stored,
     /// It stopped.
     Stopped {
         /// Why.
@@ -125,23 +152,65 @@ pub struct SimDrive {
     held: Option<Frame>,
     stopped: bool,
     last_now: Instant,
+    local_timestamp: bool,
+    restart_at: Option<Instant>,
     events: VecDeque<SimDriveEvent>,
 }
 
+/// The commands the simulated drive carries out.
+const SIM_COMMANDS: [u16; 2] = [
+    ExecuteCommandRequest::COMMAND_RESTART,
+    ExecuteCommandRequest::COMMAND_STORE_PERSISTENT_STATES,
+];
+
+/// How long after a RESTART command the simulated drive reboots (its answer leaves first).
+const RESTART_DELAY: Duration = Duration::from_millis(100);
+
+/// The shortest and longest feedback interval the simulated drive accepts [s].
+const INTERVAL_RANGE: (f64, f64) = (1e-4, 1.0);
+
+fn boot_node(cfg: &SimDriveConfig, registers: &HostRegistry, now: Instant) -> HostNode {
+    let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
+    let mut node = HostNode::new(
+        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
+        now,
+    );
+    // Fresh node, validated IDs, 8 ports: cannot fail.
+    let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
+    if let Some(id) = cfg.readiness_id {
+        let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
+    }
+    crate::registers::serve(&mut node, registers, &SIM_COMMANDS, now);
+    // An interval the simulation cannot use is refused in the answer itself.
+    let _ = node
+        .registers_mut()
+        .set_limits(PUB_INTERVAL_MIN, INTERVAL_RANGE.0, INTERVAL_RANGE.1);
+    node
+}
+
 impl SimDrive {
-    /// A simulated drive that boots now. `cfg` must have passed [`SimDriveConfig::validate`].
+    /// A simulated drive that boots now with Telega's registers holding `cfg`'s values and
+    /// local timestamps on. `cfg` must have passed [`SimDriveConfig::validate`].
     pub fn new(cfg: SimDriveConfig, now: Instant) -> Self {
-        let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
-        let mut node = HostNode::new(
-            NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
-            now,
-        );
-        // Fresh node, validated IDs, 8 ports: cannot fail.
-        let _ = node.subscribe_message(cfg.setpoint_id, Vector31::EXTENT_BYTES);
-        if let Some(id) = cfg.readiness_id {
-            let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
+        let registers = sim_drive_registers(&cfg, true);
+        SimDrive::with_registers(cfg, &registers, now)
+    }
+
+    /// A simulated drive that boots now serving `registers` (as
+    /// [`crate::registers::sim_drive_registers`] builds them); the feedback interval and local
+    /// timestamping are read from them.
+    pub fn with_registers(mut cfg: SimDriveConfig, registers: &HostRegistry, now: Instant) -> Self {
+        let node = boot_node(&cfg, registers, now);
+        if let Some(x) = interval_of(registers) {
+            cfg.interval = x;
         }
+        let local_timestamp = registers
+            .get(LOCAL_TIMESTAMP)
+            .and_then(|r| r.value.float_at(0))
+            .is_none_or(|x| x != 0.0);
         SimDrive {
+            local_timestamp,
+            restart_at: None,
             stand: Stand::new(cfg.stand, cfg.seed),
             end: (cfg.duration > 0.0).then(|| now + Duration::from_secs_f64(cfg.duration)),
             interval: Duration::from_secs_f64(cfg.interval),
@@ -157,6 +226,99 @@ impl SimDrive {
             last_now: now,
             events: VecDeque::new(),
         }
+    }
+
+    /// The registers it serves.
+    pub fn registers(&self) -> &HostRegistry {
+        self.node.registers()
+    }
+
+    /// The feedback interval now, in seconds.
+    pub fn interval(&self) -> f64 {
+        self.interval.as_secs_f64()
+    }
+
+    /// The configuration it runs with (port-IDs as of its last boot).
+    pub fn config(&self) -> &SimDriveConfig {
+        &self.cfg
+    }
+
+    /// Applies what was written over the bus and carries out the commands received.
+    fn serve(&mut self, now: Instant) {
+        while let Some(i) = self.node.take_register_change() {
+            let Some(r) = self.node.registers().by_index(i) else {
+                continue;
+            };
+            let name = r.name.as_str().unwrap_or_default().to_string();
+            if name == PUB_INTERVAL_MIN {
+                match interval_of(self.node.registers()) {
+                    Some(x) => {
+                        self.interval = Duration::from_secs_f64(x);
+                        // The next message follows the new interval at once.
+                        self.next_feedback = self.next_feedback.min(now + self.interval);
+                    }
+                    None => {
+                        // Not a usable interval: the register keeps the one in use.
+                        let keep =
+                            Value::real32(&[self.interval.as_secs_f32()]).unwrap_or_default();
+                        let _ = self.node.registers_mut().set(PUB_INTERVAL_MIN, &keep);
+                    }
+                }
+            } else if name == LOCAL_TIMESTAMP {
+                self.local_timestamp = r.value.float_at(0).is_none_or(|x| x != 0.0);
+            }
+            let value = self
+                .node
+                .registers()
+                .get(&name)
+                .map(|r| r.value.clone())
+                .unwrap_or_default();
+            self.events
+                .push_back(SimDriveEvent::RegisterWritten { name, value });
+        }
+        while let Some(c) = self.node.take_command() {
+            match c.command {
+                ExecuteCommandRequest::COMMAND_RESTART => {
+                    // Time for the answer to leave first.
+                    self.restart_at.get_or_insert(now + RESTART_DELAY);
+                }
+                ExecuteCommandRequest::COMMAND_STORE_PERSISTENT_STATES => {
+                    self.summary.stores += 1;
+                    self.events.push_back(SimDriveEvent::Stored);
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Reboots: a new node with the node- and port-IDs its registers hold (an ID register that
+    /// is not a valid ID keeps the old one), the registers' values kept, uptime from 0, torque off
+    /// until the next setpoint.
+    fn restart(&mut self, now: Instant) {
+        self.restart_at = None;
+        let registers = self.node.registers().clone();
+        let node_id = registers
+            .get("uavcan.node.id")
+            .and_then(|r| r.value.float_at(0))
+            .and_then(|v| NodeId::try_from(v as u64).ok());
+        if let Some(id) = node_id {
+            self.cfg.node_id = id;
+        }
+        if let Ok(Some(id)) = subject_register(&registers, TELEGA_FEEDBACK_ID) {
+            self.cfg.feedback_id = id;
+        }
+        if let Ok(Some(id)) = subject_register(&registers, TELEGA_SETPOINT_ID) {
+            self.cfg.setpoint_id = id;
+        }
+        if let Ok(id) = subject_register(&registers, TELEGA_READINESS_ID) {
+            self.cfg.readiness_id = id;
+        }
+        self.node = boot_node(&self.cfg, &registers, now);
+        self.last_setpoint_at = None;
+        self.setpoint = 0.0;
+        self.summary.last_readiness = None;
+        self.summary.restarts += 1;
+        self.events.push_back(SimDriveEvent::Restarted);
     }
 
     /// What it saw so far.
@@ -190,6 +352,9 @@ impl SimDrive {
             self.stop(now, StopReason::Completed);
             return;
         }
+        if self.restart_at.is_some_and(|t| now >= t) {
+            self.restart(now);
+        }
         while now >= self.next_feedback {
             let at = self.next_feedback;
             let t = at.saturating_duration_since(self.start).as_secs_f64();
@@ -205,7 +370,13 @@ impl SimDrive {
             self.stand.advance_to(t);
             let s = self.stand.measure();
             let mut fb = DoF3rdTs::default();
-            fb.timestamp.microsecond = (t * 1e6).round() as u64;
+            // Without local timestamps the field is 0: "unknown" in Cyphal (this simulation has
+            // no network time to stamp with instead).
+            fb.timestamp.microsecond = if self.local_timestamp {
+                (t * 1e6).round() as u64
+            } else {
+                0
+            };
             fb.value.kinematics.base.position = s.position as f32;
             fb.value.kinematics.base.velocity = s.velocity as f32;
             fb.value.kinematics.acceleration = s.acceleration as f32;
@@ -267,9 +438,10 @@ impl SimDrive {
             }
             _ => {}
         }
+        self.serve(now);
     }
 
-    /// The next frame to send (feedback, heartbeat), if one is due.
+    /// The next frame to send (feedback, heartbeat, answers), if one is due.
     #[must_use]
     pub fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
         self.advance(now);
@@ -300,6 +472,9 @@ impl SimDrive {
         }
         if let Some(end) = self.end {
             t = t.min(end);
+        }
+        if let Some(r) = self.restart_at {
+            t = t.min(r);
         }
         Some(t)
     }
@@ -344,9 +519,22 @@ pub fn run_sim_drive(
     clock: &dyn Clock,
     stop: &AtomicBool,
 ) -> Result<SimDriveSummary, String> {
-    let mut sim = SimDrive::new(cfg, clock.now());
+    let sim = SimDrive::new(cfg, clock.now());
+    run_sim_drive_machine(sim, transport, clock, stop, &mut |_| {})
+}
+
+/// [`run_sim_drive`] for a [`SimDrive`] built by the caller; every event also goes to
+/// `on_event`.
+pub fn run_sim_drive_machine(
+    mut sim: SimDrive,
+    transport: &mut dyn CanTransport,
+    clock: &dyn Clock,
+    stop: &AtomicBool,
+    on_event: &mut dyn FnMut(&SimDriveEvent),
+) -> Result<SimDriveSummary, String> {
     let mut end = None;
     run_realtime(&mut sim, transport, clock, stop, &mut |event| {
+        on_event(&event);
         if let SimDriveEvent::Stopped { reason, summary } = event {
             end = Some((reason, summary));
         }
@@ -357,4 +545,12 @@ pub fn run_sim_drive(
         Some((reason, _)) => Err(reason.to_string()),
         None => Err("the simulated drive's loop ended before it stopped".into()),
     }
+}
+
+/// The feedback interval `mns.pub_interval_min` holds, if usable (finite, 0.1 ms to 1 s).
+fn interval_of(registers: &HostRegistry) -> Option<f64> {
+    registers
+        .get(PUB_INTERVAL_MIN)
+        .and_then(|r| r.value.float_at(0))
+        .filter(|x| x.is_finite() && (INTERVAL_RANGE.0..=INTERVAL_RANGE.1).contains(x))
 }

@@ -133,6 +133,7 @@ fn drain(link: &VirtualLink, drive: &mut Tap, sim: &mut Observed, run: &mut Run)
                 run.phases.push((t, "stopped"));
                 run.report = Some(r);
             }
+            DriveEvent::RegisterWritten { .. } => {}
         }
     }
     while let Some(e) = sim.poll_event() {

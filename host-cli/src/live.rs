@@ -585,6 +585,7 @@ impl DriveView {
                 );
                 self.feed.flush();
             }
+            DriveEvent::RegisterWritten { .. } => {}
         }
     }
 }

@@ -33,6 +33,8 @@ enum Command {
     Plan(propid::cmd::plan::Args),
     /// Write one self-contained HTML report of a recording: fit, diagnosis, interactive plots.
     Report(propid::cmd::report::Args),
+    /// Find Telega drives on the bus, check their registers for identification, fix and store them.
+    Telega(propid::cmd::telega::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
     Demo(propid::cmd::demo::Args),
 }
@@ -50,6 +52,7 @@ fn main() -> ExitCode {
         Command::Plan(a) => propid::cmd::plan::run(a),
         Command::Report(a) => propid::cmd::report::run(a),
         Command::Demo(a) => propid::cmd::demo::run(a),
+        Command::Telega(a) => propid::cmd::telega::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

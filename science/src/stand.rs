@@ -144,6 +144,8 @@ impl StandConfig {
 
 /// Internal integration step [s].
 const DT: f64 = 5e-5;
+/// How often `run` updates the setpoint (as a current loop latches it: 10 kHz).
+const SETPOINT_STEP: f64 = 1e-4;
 
 /// The simulated stand: feed it setpoints, advance time, read what the drive would report.
 pub struct Stand {
@@ -279,9 +281,18 @@ impl Stand {
                 .sample(&mut self.rng)
                 .clamp(-0.4 / c.rate, 0.4 / c.rate);
             let t = (nominal + dt_jitter).max(0.0);
-            // The setpoint is updated by the driver faster than the feedback: evaluate it at t.
+            // The driver updates the setpoint asynchronously and faster than the feedback, and a
+            // drive's current loop latches it at tens of kHz: the torque demand is continuous on
+            // the scale of a sample, never a staircase aligned with the samples (which would lead
+            // the torque by half a sample and bias every lag estimate by Δt/2).
+            while self.time + 1e-12 < start + t {
+                let step_end = (self.time + SETPOINT_STEP).min(start + t);
+                self.set_setpoint(excitation.setpoint(0.5 * (self.time + step_end) - start));
+                self.advance_to(step_end);
+            }
+            // The demand at the sampling instant (the first sample included: it belongs to
+            // the pattern, not to the init phase).
             self.set_setpoint(excitation.setpoint(t));
-            self.advance_to(start + t);
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();

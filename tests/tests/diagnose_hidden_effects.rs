@@ -187,14 +187,16 @@ fn every_hidden_effect_is_found_named_and_measured() {
                 case.tolerance * 100.0
             ));
         }
-        // The drag coefficient of the exponent model is in other units; its J is still checked.
+        // The stand's drag is c2·|ω|^p: with a drag exponent named, its coefficient is the law's
+        // own k (extended.c2 is then the quadratic equivalent at the RMS speed).
         let c2_truth = c.c2;
+        let c2_found = r.extended.k.unwrap_or(r.extended.c2);
         if (r.extended.mass / c.inertia - 1.0).abs() > 0.02
-            || (r.extended.c2 / c2_truth - 1.0).abs() > 0.02
+            || (c2_found / c2_truth - 1.0).abs() > 0.02
         {
             failures.push(format!(
                 "{}: extended J {:.4e} (truth {:.4e}), c2 {:.4e} (truth {:.4e})",
-                case.name, r.extended.mass, c.inertia, r.extended.c2, c2_truth
+                case.name, r.extended.mass, c.inertia, c2_found, c2_truth
             ));
         }
         if r.simulation_rms.gain_percent <= 0.0 {
@@ -248,4 +250,101 @@ fn a_periodic_disturbance_is_unexplained_not_misnamed() {
         u.frequency_hz
     );
     assert!(u.description.contains("periodic"));
+}
+
+/// On the seed's sinusoid a Coulomb friction and a torque lag fit alike (docs/SCIENCE.md): the
+/// diagnosis must say "ambiguous" with the friction and its right value among the two, never name
+/// the lag alone (it did: 17.5 ms, the lag better by 0.5 % in held-out gain, the simulation
+/// preferring the friction), and not call the pattern's own frequency "unexplained".
+#[test]
+fn coulomb_friction_on_the_seeds_sine_is_ambiguous_not_a_lag() {
+    let excitation = Excitation {
+        lo: 0.1,
+        hi: 0.9,
+        period: 2.0,
+        duration: 60.0,
+        init_duration: 5.0,
+        pattern: Pattern::Sine,
+    };
+    for seed in [1, 2] {
+        let stand = StandConfig {
+            coulomb: 3e-3,
+            rate: 250.0,
+            ..StandConfig::default()
+        };
+        let r = diagnose(&simulate(stand, &excitation, seed), Options::default()).unwrap();
+        assert_eq!(
+            r.verdict,
+            Verdict::Ambiguous,
+            "seed {seed}: {}",
+            describe(&r)
+        );
+        let a = r.ambiguity.as_ref().unwrap();
+        let k = a
+            .between
+            .iter()
+            .position(|n| *n == "coulomb_friction")
+            .unwrap_or_else(|| panic!("seed {seed}: {:?}", a.between));
+        assert!((a.values[k] / 3e-3 - 1.0).abs() < 0.05, "{a:?}");
+        assert!(r.unexplained.is_none(), "seed {seed}: {:?}", r.unexplained);
+    }
+}
+
+/// The progress callback sees the base model, every candidate of every round (counted up to the
+/// round's size, whatever thread tried it) and the extended model, in that order.
+#[test]
+fn progress_reports_every_stage_in_order() {
+    use propid_science::diagnose::{diagnose_rows_observed, Stage};
+    use std::sync::Mutex;
+    let excitation = Excitation {
+        lo: 0.1,
+        hi: 0.9,
+        period: 2.0,
+        duration: 20.0,
+        init_duration: 1.0,
+        pattern: Pattern::Chirp,
+    };
+    let stand = StandConfig {
+        torque_lag: 0.01,
+        ..StandConfig::default()
+    };
+    let rows: Vec<propid_io::tsv::Row> = simulate(stand, &excitation, 9)
+        .into_iter()
+        .map(|sample| propid_io::tsv::Row {
+            ts_local: f64::NAN,
+            sample,
+        })
+        .collect();
+    let seen = Mutex::new(Vec::new());
+    let report = diagnose_rows_observed(rows, Options::default(), &|stage| {
+        seen.lock().unwrap().push(stage)
+    })
+    .unwrap();
+    let seen = seen.into_inner().unwrap();
+    assert_eq!(seen.first(), Some(&Stage::Base), "{seen:?}");
+    assert_eq!(seen.last(), Some(&Stage::Extended), "{seen:?}");
+    let rounds = report.effects.len() + 1;
+    for round in 1..=rounds.min(Options::default().max_effects) {
+        let of = seen
+            .iter()
+            .find_map(|s| match s {
+                Stage::Candidates { round: r, of, .. } if *r == round => Some(*of),
+                _ => None,
+            })
+            .unwrap_or_else(|| panic!("round {round} not reported: {seen:?}"));
+        let done: Vec<usize> = seen
+            .iter()
+            .filter_map(|s| match s {
+                Stage::Candidates { round: r, done, .. } if *r == round => Some(*done),
+                _ => None,
+            })
+            .collect();
+        let mut sorted = done.clone();
+        sorted.sort_unstable();
+        assert_eq!(
+            sorted,
+            (0..=of).collect::<Vec<_>>(),
+            "round {round}: {done:?}"
+        );
+    }
 }

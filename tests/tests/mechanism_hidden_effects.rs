@@ -61,7 +61,7 @@ fn run(s: &Scenario, p: Pattern, seed: u64) -> Report {
         Pattern::Chirp => s.simulate(pattern::chirp(b.lo, b.hi, PERIOD, b.duration), seed),
     }
     .expect("scenario simulates");
-    diagnose_rows(&rows(&records), Options::default()).expect("diagnosis runs")
+    diagnose_rows(rows(&records), Options::default()).expect("diagnosis runs")
 }
 
 fn describe(r: &Report) -> String {
@@ -139,7 +139,8 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
         Expect::Unexplained { .. } => unreachable!("not drawn here"),
     }
     if r.ambiguity.is_none() && !matches!(r.verdict, Verdict::CannotJudge { .. }) {
-        let (j, c2) = (r.extended.mass, r.extended.c2);
+        // A drag law k·|ω|^p is compared by its k (extended.c2 is its quadratic equivalent).
+        let (j, c2) = (r.extended.mass, r.extended.k.unwrap_or(r.extended.c2));
         if (j / s.fit.inertia - 1.0).abs() > 0.02 || (c2 / s.fit.c2 - 1.0).abs() > 0.02 {
             bad.push(format!(
                 "extended J {j:.4e} (expected {:.4e}), c2 {c2:.4e} (expected {:.4e})",
@@ -203,7 +204,7 @@ fn mechanisms_are_named_and_measured() {
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
 /// cannot find"); run with `-- --ignored` to see where each stands.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: lags half a sample long without the formula stand's setpoint lead, a second-order stage is not a first-order lag, braking drags in an acceleration_lag, viscous vs drag exponent on a chirp, cogging and Stribeck on the sine"]
+#[ignore = "known failures, see docs/SCIENCE.md: filters and observers right on some draws and not on others, a current loop faster than a third of a sample interval, a load cell's second-order stage at 100 Hz, braking drags in a second effect, viscous vs drag exponent, cogging and Stribeck on the sine"]
 fn mechanisms_diagnose_still_gets_wrong() {
     let failures = check(
         &[

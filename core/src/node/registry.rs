@@ -25,6 +25,8 @@
 //!   register unchanged and its value is returned. (Where PyCyphal's conversion raises an
 //!   exception, its server sends no answer at all; propid answers with the unchanged value, as
 //!   the specification prescribes.)
+//! - a register given limits ([`Registry::set_limits`]) also refuses a write that would put an
+//!   element outside them (propid's own rule; PyCyphal's registry has none).
 //!
 //! Nothing here stores anything: persistence is the owner's business. The node reports each
 //! accepted write through [`Node::take_register_change`] and each accepted command through
@@ -95,6 +97,8 @@ impl core::fmt::Display for RegisterError {
 pub struct Registry<const N: usize> {
     registers: heapless::Vec<Register, N>,
     written: [bool; N],
+    /// Per register: the closed range every element of a written numeric value must lie in.
+    limits: [Option<(f64, f64)>; N],
 }
 
 impl<const N: usize> Default for Registry<N> {
@@ -109,6 +113,7 @@ impl<const N: usize> Registry<N> {
         Registry {
             registers: heapless::Vec::new(),
             written: [false; N],
+            limits: [None; N],
         }
     }
 
@@ -190,6 +195,16 @@ impl<const N: usize> Registry<N> {
         Ok(())
     }
 
+    /// Refuses writes over the bus (`Access`) that would put an element of register `name`
+    /// outside `min..=max` (or make it NaN): the register keeps its value and the answer carries
+    /// it, as for any refused write. The owner's own [`Registry::set`] is not limited. For
+    /// registers whose owner can only use some values (an interval that must be positive).
+    pub fn set_limits(&mut self, name: &str, min: f64, max: f64) -> Result<(), RegisterError> {
+        let i = self.index_of(name).ok_or(RegisterError::NotFound)?;
+        self.limits[i] = Some((min, max));
+        Ok(())
+    }
+
     /// `uavcan.register.List`: the name at `index`, empty past the end.
     pub fn list(&self, request: &ListRequest) -> ListResponse {
         ListResponse {
@@ -208,11 +223,17 @@ impl<const N: usize> Registry<N> {
         let Some(i) = self.registers.iter().position(|r| r.name == request.name) else {
             return AccessResponse::default();
         };
+        let limits = self.limits[i];
         let r = &mut self.registers[i];
         if r.mutable && !request.value.is_empty() {
             if let Some(v) = convert(&r.value, &request.value) {
-                r.value = v;
-                self.written[i] = true;
+                let within = |(min, max): (f64, f64)| {
+                    (0..v.len()).all(|k| v.float_at(k).is_none_or(|x| x >= min && x <= max))
+                };
+                if limits.is_none_or(within) {
+                    r.value = v;
+                    self.written[i] = true;
+                }
             }
         }
         AccessResponse {
@@ -724,5 +745,27 @@ mod tests {
         assert_eq!(resp.value, u16v);
         assert!(!resp.mutable && resp.persistent);
         assert_eq!(r.take_written(), None);
+    }
+
+    #[test]
+    fn limited_registers_refuse_writes_out_of_range() {
+        let mut r: Registry<1> = Registry::new();
+        let v = Value::real32(&[0.005]).unwrap();
+        r.add("mns.pub_interval_min", v.clone(), true, true)
+            .unwrap();
+        r.set_limits("mns.pub_interval_min", 1e-4, 1.0).unwrap();
+        let write = |r: &mut Registry<1>, x: f64| {
+            r.access(&AccessRequest {
+                name: Name::new("mns.pub_interval_min").unwrap(),
+                value: Value::real64(&[x]).unwrap(),
+            })
+            .value
+        };
+        for bad in [0.0, -1.0, 2.0, f64::NAN] {
+            assert_eq!(write(&mut r, bad), v, "{bad}");
+        }
+        assert_eq!(r.take_written(), None);
+        assert_eq!(write(&mut r, 0.02), Value::real32(&[0.02]).unwrap());
+        assert_eq!(r.take_written(), Some(0));
     }
 }

@@ -81,8 +81,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // The demo's own flags: --duration and --init-duration.
         let e = crate::cmd::drive::flag_error(e);
         crate::InputError(
-            e.0.replace("--pattern-duration (PATTERN_DURATION)", "--duration")
-                .replace(" (INIT_DURATION)", ""),
+            e.0.replace(
+                "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
+                "--duration",
+            )
+            .replace(" (register init_duration, INIT_DURATION)", ""),
         )
     })?;
     let (mut transport, mut telega_end, pty) = link()?;

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use propid_science::diagnose::{
-    diagnose_rows, read_rows, report_figure, to_text, Options, Verdict,
+    diagnose_rows_observed, read_rows, report_figure, to_text, Options, Stage, Verdict,
 };
 
 use crate::{CannotJudge, InputError};
@@ -39,16 +39,46 @@ pub struct Args {
     pub max_effects: usize,
 }
 
+/// Lets glibc give every large buffer back to the system when it is freed. By default glibc
+/// raises its mmap threshold after the first large free (up to 32 MiB), so the diagnosis's
+/// 16 MB columns of a 2-million-row log then come from the heap and stay resident after they
+/// are dropped: the peak RSS was 279 MB for a live peak of about 220 MB.
+fn return_large_buffers_to_the_system() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets an allocator parameter; it is called before any thread of this
+    // command starts, takes plain integers, and M_MMAP_THRESHOLD = 1 MiB is within its range
+    // (at most HEAP_MAX_SIZE / 2 = 32 MiB on 64-bit). A refusal returns 0 and changes nothing.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
+    }
+}
+
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    return_large_buffers_to_the_system();
+    // Progress on stderr (drawn only when it is a terminal): reading and each selection round
+    // take seconds on an hour-long log.
+    let bar = indicatif::ProgressBar::new_spinner();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("diagnose {spinner} {msg} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar.set_message(format!("reading {}", args.file.display()));
     let (rows, skipped) = read_rows(&args.file)?;
-    let mut report = diagnose_rows(
-        &rows,
-        Options {
-            max_effects: args.max_effects,
-        },
-    )
-    .map_err(|e| InputError(format!("{}: {}", args.file.display(), e.0)))?;
+    let max_effects = args.max_effects;
+    let progress = |stage: Stage| {
+        bar.set_message(match stage {
+            Stage::Base => "base model and its residuals".to_string(),
+            Stage::Candidates { round, done, of } => {
+                format!("effect {round} of at most {max_effects}: {done}/{of} candidates tried")
+            }
+            Stage::Extended => "extended model".to_string(),
+        })
+    };
+    let report = diagnose_rows_observed(rows, Options { max_effects }, &progress);
+    bar.finish_and_clear();
+    let mut report = report.map_err(|e| InputError(format!("{}: {}", args.file.display(), e.0)))?;
     if skipped > 0 {
         report
             .notes

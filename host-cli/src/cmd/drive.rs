@@ -8,47 +8,72 @@ use std::sync::Arc;
 
 use anyhow::Context;
 use propid_core::can::{NodeId, SubjectId};
-use propid_drive::drive::{run_drive, ConfigError, DriveConfig, DriveEvent, Progress};
+use propid_core::dsdl::Value;
+use propid_drive::drive::{
+    run_drive_machine, ConfigError, Drive, DriveConfig, DriveEvent, Progress,
+};
 use propid_drive::realtime::SystemClock;
+use propid_drive::registers::{self, HostRegistry};
 use propid_drive::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 
 use crate::InputError;
 
-/// Arguments of `propid drive` (each also read from the PyCyphal register variable named).
+/// Arguments of `propid drive`. The seed's settings are registers (docs/REGISTERS.md): each
+/// comes from its default, then the `--registers` file, then its environment variable (the
+/// register's name as PyCyphal maps it, e.g. `SETPOINT_RAT_LO_HI`, `UAVCAN__NODE__ID`), then the
+/// flag; the node serves them over uavcan.register.List/Access while it drives.
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// This node's ID (register uavcan.node.id).
-    #[arg(long, env = "UAVCAN__NODE__ID")]
+    /// This node's ID (register uavcan.node.id, UAVCAN__NODE__ID).
+    #[arg(long)]
     pub node_id: Option<NodeId>,
     /// The bus.
     #[command(flatten)]
     pub bus: crate::bus::BusArgs,
+    /// A register file: `name: value` lines (values as the environment variables take them),
+    /// read before the environment and the flags; registers written over the bus are saved to it.
+    #[arg(long, value_name = "FILE")]
+    pub registers: Option<PathBuf>,
+    /// Take the port-IDs from the drive's own registers (uavcan.pub.dynamics.id,
+    /// uavcan.sub.setpoint_r_torq.id, uavcan.sub.readiness.id) and refuse to engage it when its
+    /// configuration would spoil the data (see `propid telega`).
+    #[arg(long, value_name = "NODE")]
+    pub from_telega: Option<NodeId>,
+    /// Print the registers (defaults, file, environment and flags applied and checked) in the
+    /// register file's format, and exit without opening the bus.
+    #[arg(long)]
+    pub show_registers: bool,
     /// Subject-ID of the readiness publisher; no readiness is published when unset
-    /// (uavcan.pub.readiness.id).
-    #[arg(long, env = "UAVCAN__PUB__READINESS__ID")]
+    /// (uavcan.pub.readiness.id, UAVCAN__PUB__READINESS__ID).
+    #[arg(long)]
     pub readiness_id: Option<SubjectId>,
-    /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id).
-    #[arg(long, env = "UAVCAN__PUB__SP_RAT__ID")]
+    /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id,
+    /// UAVCAN__PUB__SP_RAT__ID).
+    #[arg(long)]
     pub setpoint_id: Option<SubjectId>,
-    /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id).
-    #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
+    /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id,
+    /// UAVCAN__SUB__FB_DYN__ID).
+    #[arg(long)]
     pub feedback_id: Option<SubjectId>,
-    /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi).
-    #[arg(long, env = "SETPOINT_RAT_LO_HI", default_value = "0.1 0.9")]
-    pub setpoint_rat_lo_hi: String,
-    /// Period of the sinusoid [s] (register period).
-    #[arg(long, env = "PERIOD", default_value_t = 2.0)]
-    pub period: f64,
-    /// Duration of the pattern [s] (register pattern_duration).
-    #[arg(long, env = "PATTERN_DURATION", default_value_t = 200.0)]
-    pub pattern_duration: f64,
-    /// Duration of the initial run at the high setpoint [s] (register init_duration).
-    #[arg(long, env = "INIT_DURATION", default_value_t = 5.0)]
-    pub init_duration: f64,
-    /// Setpoint publication period [s] (register setpoint_period).
-    #[arg(long, env = "SETPOINT_PERIOD", default_value_t = 0.005)]
-    pub setpoint_period: f64,
+    /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi,
+    /// SETPOINT_RAT_LO_HI; default "0.1 0.9").
+    #[arg(long)]
+    pub setpoint_rat_lo_hi: Option<String>,
+    /// Period of the sinusoid [s] (register period, PERIOD; default 2).
+    #[arg(long)]
+    pub period: Option<f64>,
+    /// Duration of the pattern [s] (register pattern_duration, PATTERN_DURATION; default 200).
+    #[arg(long)]
+    pub pattern_duration: Option<f64>,
+    /// Duration of the initial run at the high setpoint [s] (register init_duration,
+    /// INIT_DURATION; default 5).
+    #[arg(long)]
+    pub init_duration: Option<f64>,
+    /// Setpoint publication period [s] (register setpoint_period, SETPOINT_PERIOD; default
+    /// 0.005).
+    #[arg(long)]
+    pub setpoint_period: Option<f64>,
     /// Pattern after the init phase (the seed: sine).
     #[arg(long, default_value_t = Pattern::Sine)]
     pub pattern: Pattern,
@@ -86,39 +111,72 @@ pub struct Args {
     pub live_allow_remote: bool,
 }
 
+fn n16(v: u16) -> Value {
+    Value::natural16(&[v]).unwrap_or_default()
+}
+
+fn r64(v: f64) -> Value {
+    Value::real64(&[v]).unwrap_or_default()
+}
+
 impl Args {
-    /// The validated configuration these arguments (and the register variables) describe.
-    pub fn config(&self) -> Result<DriveConfig, InputError> {
-        let need = |v: Option<SubjectId>, flag: &str, var: &str, what: &str| {
-            v.ok_or_else(|| InputError(format!("{what} is not set: give --{flag} or {var}")))
+    /// The registers: defaults, then the register file, then the environment (`vars`), then
+    /// the flags. A value that does not parse is refused naming its origin and register.
+    pub fn registers(
+        &self,
+        vars: impl IntoIterator<Item = (String, String)>,
+    ) -> Result<HostRegistry, InputError> {
+        let mut r = registers::drive_defaults(self.registers.is_some());
+        if let Some(path) = &self.registers {
+            let text = std::fs::read_to_string(path).map_err(|e| {
+                InputError(format!(
+                    "cannot read the register file {}: {e}",
+                    path.display()
+                ))
+            })?;
+            registers::apply_file(&mut r, path, &text).map_err(|e| InputError(e.0))?;
+        }
+        registers::apply_environment(&mut r, vars).map_err(|e| InputError(e.0))?;
+        let mut set = |name: &str, v: Option<Value>| {
+            if let Some(v) = v {
+                // The flags are typed: the conversion to the register's type cannot fail.
+                let _ = r.set(name, &v);
+            }
         };
-        let node_id = self.node_id.ok_or_else(|| {
-            InputError("node id is not set: give --node-id or UAVCAN__NODE__ID".into())
-        })?;
-        let setpoint_id = need(
-            self.setpoint_id,
-            "setpoint-id",
-            "UAVCAN__PUB__SP_RAT__ID",
-            "setpoint id",
-        )?;
-        let feedback_id = need(
-            self.feedback_id,
-            "feedback-id",
-            "UAVCAN__SUB__FB_DYN__ID",
-            "feedback id",
-        )?;
-        let (lo, hi) = parse_lo_hi(&self.setpoint_rat_lo_hi)?;
-        let excitation = match &self.pattern_file {
-            Some(path) => crate::cmd::sim::read_pattern_file(path)?,
-            None => Excitation {
-                lo,
-                hi,
-                period: self.period,
-                duration: self.pattern_duration,
-                init_duration: self.init_duration,
-                pattern: self.pattern,
-            },
-        };
+        set(
+            "uavcan.node.id",
+            self.node_id.map(|id| n16(u16::from(id.get()))),
+        );
+        set(
+            registers::DRIVE_READINESS_ID,
+            self.readiness_id.map(|id| n16(id.get())),
+        );
+        set(
+            registers::DRIVE_SETPOINT_ID,
+            self.setpoint_id.map(|id| n16(id.get())),
+        );
+        set(
+            registers::DRIVE_FEEDBACK_ID,
+            self.feedback_id.map(|id| n16(id.get())),
+        );
+        set("period", self.period.map(r64));
+        set("pattern_duration", self.pattern_duration.map(r64));
+        set("init_duration", self.init_duration.map(r64));
+        set("setpoint_period", self.setpoint_period.map(r64));
+        if let Some(text) = &self.setpoint_rat_lo_hi {
+            let (lo, hi) = parse_lo_hi(text)?;
+            set("setpoint_rat_lo_hi", Value::real64(&[lo, hi]));
+        }
+        Ok(r)
+    }
+
+    /// The validated configuration these arguments, the register file and the environment
+    /// (`vars`) describe, and the registers the drive will serve.
+    pub fn config_with(
+        &self,
+        vars: impl IntoIterator<Item = (String, String)>,
+    ) -> Result<(DriveConfig, HostRegistry), InputError> {
+        let r = self.registers(vars)?;
         let until_rel_stderr = match self.until_stderr {
             Some(p) if p > 0.0 && p < 100.0 => Some(p / 100.0),
             Some(p) => {
@@ -128,39 +186,66 @@ impl Args {
             }
             None => None,
         };
-        let cfg = DriveConfig {
-            node_id,
-            mtu: self.bus.mtu,
-            readiness_id: self.readiness_id,
-            setpoint_id,
-            feedback_id,
-            excitation,
-            setpoint_period: self.setpoint_period,
-            deadman: self.deadman,
-            drive_node_id: self.drive_node_id,
-            fit: self.fit || until_rel_stderr.is_some(),
-            until_rel_stderr,
-        };
+        let mut cfg = DriveConfig::example(Excitation {
+            lo: 0.1,
+            hi: 0.9,
+            period: 2.0,
+            duration: 200.0,
+            init_duration: 5.0,
+            pattern: self.pattern,
+        });
+        cfg.mtu = self.bus.mtu;
+        cfg.deadman = self.deadman;
+        cfg.drive_node_id = self.drive_node_id;
+        cfg.fit = self.fit || until_rel_stderr.is_some();
+        cfg.until_rel_stderr = until_rel_stderr;
+        let mut with_ids = r.clone();
+        if self.from_telega.is_some() {
+            // The port-IDs come from the drive later: check everything else now, before anything
+            // is sent.
+            for name in [registers::DRIVE_SETPOINT_ID, registers::DRIVE_FEEDBACK_ID] {
+                if with_ids.get(name).and_then(|x| x.value.float_at(0))
+                    == Some(f64::from(registers::UNSET))
+                {
+                    let _ = with_ids.set(name, &n16(0));
+                }
+            }
+        }
+        registers::apply_drive_registers(&with_ids, &mut cfg).map_err(flag_error)?;
+        if let Some(path) = &self.pattern_file {
+            cfg.excitation = crate::cmd::sim::read_pattern_file(path)?;
+        }
         cfg.validate().map_err(flag_error)?;
-        Ok(cfg)
+        Ok((cfg, r))
+    }
+
+    /// [`Args::config_with`] the process's environment.
+    pub fn config(&self) -> Result<(DriveConfig, HostRegistry), InputError> {
+        self.config_with(std::env::vars())
     }
 }
 
-/// A configuration error in the words of the command line: the flag (and its register
-/// variable, where it has one) and what is wrong.
+/// A configuration error in the words of the command line: the flag, the register and its
+/// environment variable, and what is wrong.
 pub fn flag_error(e: ConfigError) -> InputError {
-    let (flag, var) = match e.setting {
-        "node_id" => ("--node-id", Some("UAVCAN__NODE__ID")),
-        "setpoint_id" => ("--setpoint-id", Some("UAVCAN__PUB__SP_RAT__ID")),
-        "feedback_id" => ("--feedback-id", Some("UAVCAN__SUB__FB_DYN__ID")),
-        "readiness_id" => ("--readiness-id", Some("UAVCAN__PUB__READINESS__ID")),
-        "setpoint_lo" | "setpoint_hi" | "setpoint_rat_lo_hi" => {
-            ("--setpoint-rat-lo-hi", Some("SETPOINT_RAT_LO_HI"))
+    let (flag, register) = match e.setting {
+        "node_id" | "uavcan.node.id" => ("--node-id", Some("uavcan.node.id")),
+        "setpoint_id" | registers::DRIVE_SETPOINT_ID => {
+            ("--setpoint-id", Some(registers::DRIVE_SETPOINT_ID))
         }
-        "period" => ("--period", Some("PERIOD")),
-        "pattern_duration" => ("--pattern-duration", Some("PATTERN_DURATION")),
-        "init_duration" => ("--init-duration", Some("INIT_DURATION")),
-        "setpoint_period" => ("--setpoint-period", Some("SETPOINT_PERIOD")),
+        "feedback_id" | registers::DRIVE_FEEDBACK_ID => {
+            ("--feedback-id", Some(registers::DRIVE_FEEDBACK_ID))
+        }
+        "readiness_id" | registers::DRIVE_READINESS_ID => {
+            ("--readiness-id", Some(registers::DRIVE_READINESS_ID))
+        }
+        "setpoint_lo" | "setpoint_hi" | "setpoint_rat_lo_hi" => {
+            ("--setpoint-rat-lo-hi", Some("setpoint_rat_lo_hi"))
+        }
+        "period" => ("--period", Some("period")),
+        "pattern_duration" => ("--pattern-duration", Some("pattern_duration")),
+        "init_duration" => ("--init-duration", Some("init_duration")),
+        "setpoint_period" => ("--setpoint-period", Some("setpoint_period")),
         "deadman" => ("--deadman", None),
         "drive_node_id" => ("--drive-node-id", None),
         "mtu" => ("--mtu", None),
@@ -168,8 +253,12 @@ pub fn flag_error(e: ConfigError) -> InputError {
         "duration" => ("--duration", None),
         other => return InputError(format!("{other}: {}", e.problem)),
     };
-    match var {
-        Some(var) => InputError(format!("{flag} ({var}) {}", e.problem)),
+    match register {
+        Some(reg) => InputError(format!(
+            "{flag} (register {reg}, {}) {}",
+            registers::environment_name(reg),
+            e.problem
+        )),
         None => InputError(format!("{flag} {}", e.problem)),
     }
 }
@@ -224,10 +313,96 @@ fn progress_line(p: &Progress, excitation: &Excitation) -> String {
     line
 }
 
+/// A register written over the bus: kept in the register file (if one is used) for the next
+/// run, and said on stderr.
+fn save_written(
+    file: Option<&std::path::Path>,
+    regs: &mut HostRegistry,
+    name: &str,
+    value: &Value,
+) {
+    let shown = registers::show(value);
+    let Some(path) = file else {
+        eprintln!("drive: register {name} written over the bus: {shown} (no --registers file: not kept; this run keeps its values)");
+        return;
+    };
+    let _ = regs.set(name, value);
+    match std::fs::write(path, registers::render_file(regs)) {
+        Ok(()) => eprintln!(
+            "drive: register {name} written over the bus: {shown}, saved to {} for the next run",
+            path.display()
+        ),
+        Err(e) => eprintln!(
+            "drive: register {name} written over the bus: {shown}; cannot save it to {}: {e}",
+            path.display()
+        ),
+    }
+}
+
 /// Runs `propid drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let cfg = args.config()?;
+    let (mut cfg, mut file_registers) = args.config()?;
+    if args.show_registers {
+        print!("{}", registers::render_file(&file_registers));
+        return Ok(());
+    }
     let mut transport = args.bus.open()?;
+    if let Some(node) = args.from_telega {
+        let ports =
+            crate::cmd::telega::drive_ports(transport.as_mut(), cfg.node_id, cfg.mtu, node)?;
+        let pick = |flag: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
+            match (flag, theirs) {
+                (Some(f), Some(t)) if f != t => Err(InputError(format!(
+                    "--{name} {f} but drive {node} has {reg} = {t}; drop the flag or change the register with propid telega"
+                ))),
+                (_, t) => Ok(t),
+            }
+        };
+        let feedback = pick(
+            args.feedback_id,
+            ports.feedback,
+            "feedback-id",
+            registers::TELEGA_FEEDBACK_ID,
+        )?;
+        let setpoint = pick(
+            args.setpoint_id,
+            ports.setpoint,
+            "setpoint-id",
+            registers::TELEGA_SETPOINT_ID,
+        )?;
+        let readiness = pick(
+            args.readiness_id,
+            ports.readiness,
+            "readiness-id",
+            registers::TELEGA_READINESS_ID,
+        )?;
+        cfg.feedback_id = feedback.ok_or_else(|| {
+            InputError(format!(
+                "drive {node} has no {} set",
+                registers::TELEGA_FEEDBACK_ID
+            ))
+        })?;
+        cfg.setpoint_id = setpoint.ok_or_else(|| {
+            InputError(format!(
+                "drive {node} has no {} set",
+                registers::TELEGA_SETPOINT_ID
+            ))
+        })?;
+        cfg.readiness_id = readiness;
+        cfg.drive_node_id = Some(node);
+        eprintln!(
+            "drive: drive {node} publishes feedback on {}, takes setpoints on {}, readiness on {}",
+            cfg.feedback_id,
+            cfg.setpoint_id,
+            cfg.readiness_id.map_or("none".into(), |r| r.to_string())
+        );
+    }
+    // What the node serves: the run's values, and the text registers as given.
+    let mut served = registers::drive_registers(&cfg, args.registers.is_some());
+    if let Some(d) = file_registers.get("uavcan.node.description") {
+        let _ = served.set("uavcan.node.description", &d.value.clone());
+    }
+    let register_file = args.registers.clone();
     let stop = Arc::new(AtomicBool::new(false));
     crate::signals::install(&stop)?;
     let mut out: Box<dyn Write> = match &args.output {
@@ -246,13 +421,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         excitation,
         "propid drive",
     )?;
-    let outcome = run_drive(
+    let drive = Drive::with_registers(
         cfg,
+        &served,
+        propid_drive::realtime::Clock::now(&SystemClock),
+    );
+    let outcome = run_drive_machine(
+        drive,
         transport.as_mut(),
         &SystemClock,
         &stop,
         &mut out,
         &mut |e| {
+            if let DriveEvent::RegisterWritten { name, value } = e {
+                save_written(register_file.as_deref(), &mut file_registers, name, value);
+            }
             print_event(e, &excitation, args.progress);
             if let Some((_, view)) = live.as_mut() {
                 view.on_event(e);

@@ -10,3 +10,4 @@ pub mod replay;
 pub mod report;
 pub mod sim;
 pub mod sim_drive;
+pub mod telega;

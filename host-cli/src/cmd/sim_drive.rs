@@ -6,8 +6,10 @@ use std::sync::Arc;
 
 use propid_core::can::{NodeId, SubjectId};
 use propid_core::dsdl::Readiness;
+use propid_drive::realtime::Clock;
 use propid_drive::realtime::SystemClock;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
+use propid_drive::registers;
+use propid_drive::sim_drive::{run_sim_drive_machine, SimDrive, SimDriveConfig, SimDriveEvent};
 
 use crate::cmd::sim::StandArgs;
 
@@ -29,9 +31,13 @@ pub struct Args {
     /// Dynamics feedback subject.
     #[arg(long, env = "UAVCAN__PUB__FB_DYN__ID", default_value = "110")]
     pub feedback_id: SubjectId,
-    /// Feedback interval [s].
+    /// Feedback interval [s] (register mns.pub_interval_min; writable over the bus).
     #[arg(long, default_value_t = 0.002)]
     pub interval: f64,
+    /// Stamp the feedback with the drive's clock (register mns.local_timestamp; when false the
+    /// timestamp is 0, unknown).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub local_timestamp: bool,
     /// Stop after this many seconds (0: run until interrupted).
     #[arg(long, default_value_t = 0.0)]
     pub duration: f64,
@@ -72,8 +78,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         transport.name(),
         cfg.feedback_id
     );
+    let regs = registers::sim_drive_registers(&cfg, args.local_timestamp);
+    let sim = SimDrive::with_registers(cfg, &regs, SystemClock.now());
     let summary =
-        run_sim_drive(cfg, transport.as_mut(), &SystemClock, &stop).map_err(anyhow::Error::msg)?;
+        run_sim_drive_machine(
+            sim,
+            transport.as_mut(),
+            &SystemClock,
+            &stop,
+            &mut |e| match e {
+                SimDriveEvent::RegisterWritten { name, value } => eprintln!(
+                    "sim-drive: register {name} written: {}",
+                    registers::show(value)
+                ),
+                SimDriveEvent::Restarted => {
+                    eprintln!("sim-drive: restarted (port-IDs from the registers)")
+                }
+                SimDriveEvent::Stored => eprintln!("sim-drive: asked to store its registers"),
+                _ => {}
+            },
+        )
+        .map_err(anyhow::Error::msg)?;
     eprintln!(
         "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {}",
         summary.setpoints,

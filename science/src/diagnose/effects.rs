@@ -22,6 +22,7 @@ use super::{
     ResidualAnalysis, SimulationRms, Traces, Unexplained, Verdict, CONCENTRATED, FOLDS, HOLDOUT,
     MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
+use super::{Observer, Stage};
 use propid_io::InputError;
 
 /// The effects propid knows how to look for.
@@ -182,9 +183,10 @@ struct Model {
     width: Width,
 }
 
-/// Per-model precomputation: the torque input F̃ and the drag exponent.
-struct Prepared {
-    force: Vec<f64>,
+/// Per-model precomputation: the torque input F̃ (the measured force itself, borrowed, unless a
+/// torque lag filters it) and the drag exponent.
+struct Prepared<'s> {
+    force: std::borrow::Cow<'s, [f64]>,
     exponent: f64,
 }
 
@@ -209,7 +211,7 @@ impl Model {
         2 + self.effects.iter().map(|e| e.kind.columns()).sum::<usize>()
     }
 
-    fn prepare(&self, s: &Signals) -> Prepared {
+    fn prepare<'s>(&self, s: &'s Signals) -> Prepared<'s> {
         let lag = self
             .effects
             .iter()
@@ -217,8 +219,8 @@ impl Model {
             .map(|e| e.param);
         Prepared {
             force: match lag {
-                Some(l) => s.lagged_force(l),
-                None => s.force.clone(),
+                Some(l) => std::borrow::Cow::Owned(s.lagged_force(l)),
+                None => std::borrow::Cow::Borrowed(&s.force),
             },
             exponent: self
                 .effects
@@ -239,8 +241,8 @@ impl Model {
         let mut c = 2;
         for e in &self.effects {
             match e.kind {
-                EffectKind::ForceSensorLag => row[c] = s.force_rate_instrument[i],
-                EffectKind::AccelerationLag => row[c] = -s.jerk_instrument[i],
+                EffectKind::ForceSensorLag => row[c] = s.force_rate_instrument(i),
+                EffectKind::AccelerationLag => row[c] = -s.jerk_instrument(i),
                 _ => {}
             }
             c += e.kind.columns();
@@ -273,6 +275,10 @@ impl Model {
         r[0] = p.force[i];
         r[1] = if p.exponent == 2.0 {
             -omega * omega.abs()
+        } else if omega == s.velocity[i] {
+            // The measured speed: |ω|^p as exp(p·ln|ω|) from the logarithm kept in the
+            // signals (a third of `powf`'s cost, in every pass of the exponent's tuning).
+            -(p.exponent * s.log_speed[i]).exp() * sgn
         } else {
             -omega.abs().powf(p.exponent) * sgn
         };
@@ -632,8 +638,24 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
         // 0.2 ms … 0.1 s (current loops and filters), within the half-second warm-up.
         EffectKind::TorqueLag => (0..=20).map(|k| 2e-4 * 1.365f64.powi(k)).collect(),
         EffectKind::TorqueRipple => {
-            let best = (1..=24)
-                .map(|k| (k as f64, score(k as f64)))
+            // The harmonics of the rotor angle the current model's residual correlates with most
+            // (one pass for all 24), then the held-out error of the best three: adding a sin/cos
+            // pair gains about as much as its correlation with the residual, so the other 21 full
+            // cross-validations (sin and cos of every sample each) would not change the choice.
+            let position = s.position.as_ref()?;
+            let f = fit_on_all(model, s)?;
+            let r = residuals(model, &f, s);
+            let correlations = harmonic_correlations::<24>(&r, position);
+            let mut by_strength: Vec<(f64, f64)> = correlations
+                .iter()
+                .enumerate()
+                .map(|(k, (cs, cc))| ((k + 1) as f64, cs * cs + cc * cc))
+                .collect();
+            by_strength.sort_by(|a, b| b.1.total_cmp(&a.1));
+            let best = by_strength
+                .iter()
+                .take(3)
+                .map(|&(k, _)| (k, score(k)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
             return Some(best.0);
         }
@@ -661,11 +683,10 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
         | EffectKind::ForceOffset
         | EffectKind::BrakingTorque => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
         EffectKind::TimeBase => (e.param, f64::NAN),
-        EffectKind::ForceSensorLag => (
-            held_input_lag(fit.theta[col] / t0, s.rate),
-            fit.stderr[col] / t0.abs(),
-        ),
-        EffectKind::AccelerationLag => (held_input_lag(fit.theta[col], s.rate), fit.stderr[col]),
+        // The derivative's coefficient is the time constant itself: the slopes are centred and
+        // a drive's signals are continuous between samples (no half-sample correction).
+        EffectKind::ForceSensorLag => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
+        EffectKind::AccelerationLag => (fit.theta[col], fit.stderr[col]),
         EffectKind::TorqueRipple | EffectKind::PeriodicDisturbance => {
             let (a, b) = (fit.theta[col], fit.theta[col + 1]);
             let amp = (a * a + b * b).sqrt();
@@ -692,21 +713,6 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
             (q, se)
         }
     }
-}
-
-/// The time constant L of a first-order lag from the coefficient c of the derivative that
-/// inverts it, for an input held between samples (a drive's torque follows a setpoint that changes
-/// once per sample, so the sensor sees a staircase). The exact inverse of the sampled lag,
-/// x_k = y_k + (1/α − 1)(y_k − y_{k−1}) with α = 1 − e^{−Δt/L}, has 1/α − 1 = L/Δt − ½ + Δt/(12L) + …,
-/// so c = L − Δt/2 + Δt²/(12L): the derivative's coefficient is short by half a sample. (Read
-/// as L it would be 17 % short for a 12 ms lag at 250 Hz.)
-fn held_input_lag(c: f64, rate: f64) -> f64 {
-    let dt = 1.0 / rate;
-    let l0 = c + 0.5 * dt;
-    if l0 <= 0.0 {
-        return c;
-    }
-    c + 0.5 * dt - dt * dt / (12.0 * l0)
 }
 
 fn fit_on_all(model: &Model, s: &Signals) -> Option<Fit> {
@@ -767,13 +773,68 @@ fn base_model_of(fit: &Fit, model: &Model, s: &Signals) -> BaseModel {
         .iter()
         .position(|e| e.kind == EffectKind::ViscousFriction)
         .map_or(0.0, |i| effect_value(model, i, fit, s).0);
-    BaseModel {
+    let quadratic = BaseModel {
         mass,
         c1,
         c2,
         mass_stderr: fit.stderr[0] * mass * mass,
         c2_stderr: ((fit.stderr[1] / t0).powi(2) + (c2 * fit.stderr[0] / t0).powi(2)).sqrt(),
+        k: None,
+        p: None,
+    };
+    // With a drag exponent the second coefficient is k of k·|ω|^p, not c2.
+    match model
+        .effects
+        .iter()
+        .find(|e| e.kind == EffectKind::DragExponent)
+    {
+        Some(e) => {
+            let (k, k_stderr) = (quadratic.c2, quadratic.c2_stderr);
+            quadratic.power_law(k, k_stderr, e.param, super::rms(&s.velocity))
+        }
+        None => quadratic,
     }
+}
+
+/// Pearson correlations of `r` with sin(kx) and cos(kx) of the rotor angle x, for k = 1…K, in
+/// one pass: sin(kx), cos(kx) by the angle-addition recurrence from sin x, cos x (two trig calls
+/// per sample instead of 2K, and no column per harmonic).
+fn harmonic_correlations<const K: usize>(r: &[f64], x: &[f64]) -> [(f64, f64); K] {
+    #[derive(Clone, Copy, Default)]
+    struct Sums {
+        v: f64,
+        vv: f64,
+        rv: f64,
+    }
+    let (mut sr, mut srr) = (0.0, 0.0);
+    let mut sums = [[Sums::default(); 2]; K];
+    let n = r.len().min(x.len());
+    for (ri, xi) in r.iter().zip(x) {
+        sr += ri;
+        srr += ri * ri;
+        let (s1, c1) = xi.sin_cos();
+        let (mut sk, mut ck) = (s1, c1);
+        for pair in sums.iter_mut() {
+            for (acc, v) in pair.iter_mut().zip([sk, ck]) {
+                acc.v += v;
+                acc.vv += v * v;
+                acc.rv += ri * v;
+            }
+            (sk, ck) = (sk * c1 + ck * s1, ck * c1 - sk * s1);
+        }
+    }
+    let nf = n as f64;
+    let corr = |a: &Sums| {
+        let sxy = a.rv - sr * a.v / nf;
+        let sxx = srr - sr * sr / nf;
+        let syy = a.vv - a.v * a.v / nf;
+        if n < 2 || sxx <= 0.0 || syy <= 0.0 {
+            0.0
+        } else {
+            sxy / (sxx * syy).sqrt()
+        }
+    };
+    core::array::from_fn(|k| (corr(&sums[k][0]), corr(&sums[k][1])))
 }
 
 /// Power of the (mean-removed) `r` at `f` [Hz], on the uniform time grid of the median rate.
@@ -792,35 +853,56 @@ fn power_at(r: &[f64], mean: f64, rate: f64, f: f64) -> f64 {
 }
 
 /// The largest peak of the residual's spectrum between 2/T and min(rate/2, 60 Hz): its frequency
-/// and its power over the median power. Bins are half the resolution 1/T apart (at most 6000),
-/// and the peak frequency is refined between its neighbours.
+/// and its power over the median power of the bins in that band. The spectrum is one real FFT of
+/// the mean-removed residual, taken on the uniform grid of the median rate and zero-padded to at
+/// least twice its length (bins at most half the resolution 1/T apart); the peak frequency is then
+/// refined between its neighbours with the exact DFT. O(n log n) time, 2n + O(1) extra f64s.
 fn periodogram(s: &Signals, r: &[f64]) -> (f64, f64) {
     let duration = (s.t[s.len() - 1] - s.t[0]).max(1e-9);
     let (fmin, fmax) = (2.0 / duration, (s.rate / 2.0).min(60.0));
-    let nf = (((fmax - fmin) * 2.0 * duration) as usize).clamp(100, 6000);
     let mean = r.iter().sum::<f64>() / r.len() as f64;
-    let df = (fmax - fmin) / (nf - 1) as f64;
-    let powers: Vec<(f64, f64)> = (0..nf)
-        .map(|k| {
-            let f = fmin + df * k as f64;
-            (f, power_at(r, mean, s.rate, f))
-        })
+    let m = (2 * r.len()).next_power_of_two().max(256);
+    // In f32: half the memory of f64 (the transform is the largest buffer of a long log), and
+    // ample for locating a peak 40× over the median; its height is then measured in f64.
+    let fft = realfft::RealFftPlanner::<f32>::new().plan_fft_forward(m);
+    let mut input = fft.make_input_vec();
+    for (x, v) in input.iter_mut().zip(r) {
+        *x = (v - mean) as f32;
+    }
+    let mut spectrum = fft.make_output_vec();
+    // Cannot fail: both buffers come from the plan itself.
+    if fft.process(&mut input, &mut spectrum).is_err() {
+        return (0.0, 0.0);
+    }
+    drop(input);
+    let df = s.rate / m as f64;
+    let k0 = ((fmin / df).ceil() as usize).max(1);
+    let k1 = ((fmax / df).floor() as usize)
+        .min(spectrum.len() - 1)
+        .max(k0);
+    let powers: Vec<f64> = spectrum[k0..=k1]
+        .iter()
+        .map(|c| f64::from(c.norm_sqr()))
         .collect();
-    let mut sorted: Vec<f64> = powers.iter().map(|p| p.1).collect();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2].max(f64::MIN_POSITIVE);
-    let peak = powers
+    drop(spectrum);
+    let (peak_k, peak_p) = powers
         .iter()
         .copied()
+        .enumerate()
         .max_by(|a, b| a.1.total_cmp(&b.1))
-        .unwrap_or((0.0, 0.0));
+        .unwrap_or((0, 0.0));
+    let mut sorted = powers;
+    let mid = sorted.len() / 2;
+    let median = *sorted.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let median = median.max(f64::MIN_POSITIVE);
+    let peak_f = (k0 + peak_k) as f64 * df;
     let f = golden(
-        peak.0 - df,
-        peak.0 + df,
+        peak_f - df,
+        peak_f + df,
         |f| -power_at(r, mean, s.rate, f),
         20,
     );
-    let p = power_at(r, mean, s.rate, f).max(peak.1);
+    let p = power_at(r, mean, s.rate, f).max(peak_p);
     (f, p / median)
 }
 
@@ -923,8 +1005,114 @@ fn fold_wins(a: &Cv, b: &Cv) -> usize {
     a.folds.iter().zip(&b.folds).filter(|(x, y)| x < y).count()
 }
 
+/// What trying one candidate on the current model gave.
+enum Tried {
+    /// The model would need more than [`MAX_COLUMNS`] columns.
+    TooWide(EffectKind),
+    /// Its scores, and the trial model when it passes every test.
+    Scored {
+        score: CandidateScore,
+        pass: Option<(Model, Cv, f64, f64)>,
+    },
+}
+
+/// Tunes `kind` on `model`, cross-validates it, checks that it is physical, gains enough, in
+/// enough folds, and does not make the held-out simulation worse.
+fn try_candidate(
+    kind: EffectKind,
+    model: &Model,
+    current: &Cv,
+    current_sim: f64,
+    s: &Signals,
+    sim_of: &(dyn Fn(&Model) -> Option<Vec<f64>> + Sync),
+    measured: &[f64],
+) -> Option<Tried> {
+    let param = tune(model, kind, s)?;
+    let Some(trial) = model.with(Effect { kind, param }) else {
+        return Some(Tried::TooWide(kind));
+    };
+    let cv = cross_validate(&trial, s)?;
+    let gain = 1.0 - cv.mse / current.mse;
+    let wins = fold_wins(&cv, current);
+    let value = fit_on_all(&trial, s)
+        .map(|f| effect_value(&trial, trial.effects.len() - 1, &f, s).0)
+        .unwrap_or(f64::NAN);
+    let mut note = String::new();
+    let mut sim_gain = f64::NAN;
+    if let Err(why) = physical(kind, value, s.rate) {
+        note = why;
+    } else if gain < MIN_GAIN {
+        note = format!(
+            "held-out gain {:.2} % is below the {:.0} % threshold",
+            gain * 100.0,
+            MIN_GAIN * 100.0
+        );
+    } else if wins < MIN_FOLDS_BETTER {
+        note = format!("better in only {wins} of {FOLDS} folds");
+    } else {
+        let rms = sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured));
+        sim_gain = 1.0 - rms / current_sim;
+        if sim_gain < -MAX_SIM_LOSS {
+            note = format!(
+                "the held-out simulated velocity gets worse ({:+.1} %)",
+                sim_gain * 100.0
+            );
+        }
+    }
+    let pass = note.is_empty().then_some((trial, cv, gain, sim_gain));
+    Some(Tried::Scored {
+        score: CandidateScore {
+            kind,
+            name: kind.name(),
+            cv_gain_percent: gain * 100.0,
+            folds_better: wins,
+            value,
+            simulation_gain_percent: sim_gain * 100.0,
+            selected: false,
+            note,
+        },
+        pass,
+    })
+}
+
+/// `f` over `items` on up to as many threads as the machine has cores, results in item order.
+fn in_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(items.len())
+        .max(1);
+    if threads == 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { break };
+                        mine.push((i, f(item)));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| match w.join() {
+                Ok(v) => v,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}
+
 /// The whole diagnosis.
-pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
+pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Report, InputError> {
     let n = s.len();
     let base = Model::default();
     let unfit = || {
@@ -944,27 +1132,31 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
 
     // 2. Residual analysis of the base model.
     let r_base = residuals(&base, &base_fit, s);
-    let sgn: Vec<f64> = s.velocity.iter().map(|w| w.signum()).collect();
+    let sign_correlation = {
+        let sgn: Vec<f64> = s.velocity.iter().map(|w| w.signum()).collect();
+        correlation(&r_base, &sgn)
+    };
     let mut correlations = vec![
         ("velocity", correlation(&r_base, &s.velocity)),
-        ("sign(velocity)", correlation(&r_base, &sgn)),
+        ("sign(velocity)", sign_correlation),
         ("force rate", correlation(&r_base, &s.force_rate)),
         ("acceleration", correlation(&r_base, &s.acceleration)),
         ("time", correlation(&r_base, &s.t)),
     ];
     if let Some(pos) = &s.position {
-        let best = (1..=24)
-            .map(|k| {
-                let sn: Vec<f64> = pos.iter().map(|x| (k as f64 * x).sin()).collect();
-                let cs: Vec<f64> = pos.iter().map(|x| (k as f64 * x).cos()).collect();
-                (correlation(&r_base, &sn).powi(2) + correlation(&r_base, &cs).powi(2)).sqrt()
-            })
+        let best = harmonic_correlations::<24>(&r_base, pos)
+            .iter()
+            .map(|(cs, cc)| (cs * cs + cc * cc).sqrt())
             .fold(0.0, f64::max);
         correlations.push(("position (best harmonic)", best));
     } else {
         notes.push("no position column: torque_ripple cannot be tested".into());
     }
     let (dominant_frequency_hz, peak_to_median) = periodogram(s, &r_base);
+    // Only the plot's thinned copy is kept (the full residual is a column of n).
+    let trace_step = (n / 20000).max(1);
+    let residual_base_trace: Vec<f64> = r_base.iter().step_by(trace_step).copied().collect();
+    drop(r_base);
     let force_span = s.force.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
         - s.force.iter().cloned().fold(f64::INFINITY, f64::min);
     let steady = s
@@ -1003,74 +1195,47 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     let mut ambiguity = None;
     let signal_power =
         s.acceleration[s.first..].iter().map(|a| a * a).sum::<f64>() / (n - s.first).max(1) as f64;
-    for _round in 0..options.max_effects {
+    for round in 1..=options.max_effects {
         // A model that already fits to rounding error leaves nothing to explain.
         if current.mse < 1e-18 * signal_power {
             break;
         }
+        // The candidates are independent given the current model: evaluated on all cores, then
+        // taken in the fixed order of CANDIDATES (the same report whatever the thread count).
+        let kinds: Vec<EffectKind> = EffectKind::CANDIDATES
+            .into_iter()
+            .filter(|&kind| {
+                // One lag per model: the three delay the measured acceleration alike, and two of
+                // them together split one delay between them (seen on the formula-level stand: a
+                // 12 ms force-sensor lag came out as 14 ms plus a 4 ms acceleration lag).
+                !(model.has(kind)
+                    || (kind.is_lag() && model.effects.iter().any(|e| e.kind.is_lag()))
+                    || (kind == EffectKind::TorqueRipple && s.position.is_none()))
+            })
+            .collect();
+        let done = std::sync::atomic::AtomicUsize::new(0);
+        let of = kinds.len();
+        progress(Stage::Candidates { round, done: 0, of });
+        let trial_of = |&kind: &EffectKind| {
+            let tried = try_candidate(kind, &model, &current, current_sim, s, &sim_of, measured);
+            let done = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            progress(Stage::Candidates { round, done, of });
+            tried
+        };
+        let outcomes = in_parallel(&kinds, trial_of);
         let mut passing: Vec<(Model, Cv, f64, usize, f64)> = Vec::new();
-        for kind in EffectKind::CANDIDATES {
-            // One lag per model: the three delay the measured acceleration alike, and two of
-            // them together split one delay between them (seen on the formula-level stand: a
-            // 12 ms force-sensor lag came out as 14 ms plus a 4 ms acceleration lag).
-            let excluded = model.has(kind)
-                || (kind.is_lag() && model.effects.iter().any(|e| e.kind.is_lag()))
-                || (kind == EffectKind::TorqueRipple && s.position.is_none());
-            if excluded {
-                continue;
-            }
-            let Some(param) = tune(&model, kind, s) else {
-                continue;
-            };
-            let Some(trial) = model.with(Effect { kind, param }) else {
-                notes.push(format!(
+        for outcome in outcomes.into_iter().flatten() {
+            match outcome {
+                Tried::TooWide(kind) => notes.push(format!(
                     "{} not tried: the model would need more than {MAX_COLUMNS} regression columns",
                     kind.name()
-                ));
-                continue;
-            };
-            let Some(cv) = cross_validate(&trial, s) else {
-                continue;
-            };
-            let gain = 1.0 - cv.mse / current.mse;
-            let wins = fold_wins(&cv, &current);
-            let value = fit_on_all(&trial, s)
-                .map(|f| effect_value(&trial, trial.effects.len() - 1, &f, s).0)
-                .unwrap_or(f64::NAN);
-            let mut note = String::new();
-            let mut sim_gain = f64::NAN;
-            if let Err(why) = physical(kind, value, s.rate) {
-                note = why;
-            } else if gain < MIN_GAIN {
-                note = format!(
-                    "held-out gain {:.2} % is below the {:.0} % threshold",
-                    gain * 100.0,
-                    MIN_GAIN * 100.0
-                );
-            } else if wins < MIN_FOLDS_BETTER {
-                note = format!("better in only {wins} of {FOLDS} folds");
-            } else {
-                let rms = sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured));
-                sim_gain = 1.0 - rms / current_sim;
-                if sim_gain < -MAX_SIM_LOSS {
-                    note = format!(
-                        "the held-out simulated velocity gets worse ({:+.1} %)",
-                        sim_gain * 100.0
-                    );
+                )),
+                Tried::Scored { score, pass } => {
+                    candidates.push(score);
+                    if let Some((trial, cv, gain, sim_gain)) = pass {
+                        passing.push((trial, cv, gain, candidates.len() - 1, sim_gain));
+                    }
                 }
-            }
-            candidates.push(CandidateScore {
-                kind,
-                name: kind.name(),
-                cv_gain_percent: gain * 100.0,
-                folds_better: wins,
-                value,
-                simulation_gain_percent: sim_gain * 100.0,
-                selected: false,
-                note: note.clone(),
-            });
-            if note.is_empty() {
-                passing.push((trial, cv, gain, candidates.len() - 1, sim_gain));
             }
         }
         // The largest held-out gain wins. The three lags look alike in the acceleration equation
@@ -1111,9 +1276,13 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         // (the rival's gain within AMBIGUOUS of the winner's, and the winner better in fewer
         // than MIN_FOLDS_BETTER folds) are not told apart by these data: say so, with both
         // estimates, and name neither (lags among themselves were settled above).
+        // The same when the winner is better in most folds but the held-out simulation prefers
+        // the rival: the two held-out criteria disagree (on the seed's sinusoid a 3 mN·m Coulomb
+        // friction gained 85.25 % against a 17.5 ms torque lag's 85.73 %, the lag better in 5 of
+        // 5 folds by that sliver, while the simulation preferred the friction, 83.4 % vs 80.8 %).
         if let Some(rival) = passing.iter().skip(1).find(|p| {
             p.2 >= (1.0 - AMBIGUOUS) * passing[0].2
-                && fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER
+                && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER || p.4 > passing[0].4)
                 && !(is_lag(p.3) && is_lag(passing[0].3))
         }) {
             let (a, b) = (&candidates[passing[0].3], &candidates[rival.3]);
@@ -1141,6 +1310,7 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
     }
 
     // 4. Extended model, held-out simulation, leftover structure.
+    progress(Stage::Extended);
     let ext_fit = fit_on_all(&model, s).ok_or_else(unfit)?;
     let sim_ext = sim_of(&model).ok_or_else(unfit)?;
     let rms_base = rms_error(&sim_base, measured);
@@ -1169,7 +1339,8 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
         .and_then(|f| concentration(s, &residuals(&model, &f, s), test.clone()));
     let (f_peak, ratio) = periodogram(s, &r_ext);
     let mut unexplained = None;
-    if ratio > 40.0 {
+    // After an ambiguity the structure is explained, twice over: not "unexplained".
+    if ratio > 40.0 && ambiguity.is_none() {
         let probe = model.with(Effect {
             kind: EffectKind::PeriodicDisturbance,
             param: f_peak,
@@ -1197,14 +1368,14 @@ pub fn run(s: &Signals, options: Options) -> Result<Report, InputError> {
             }
         }
     }
-    let step = (n / 20000).max(1);
+    let step = trace_step;
     let traces = Traces {
         t: s.t[test.clone()].to_vec(),
         measured: measured.to_vec(),
         base: sim_base,
         extended: sim_ext,
         t_all: s.t.iter().step_by(step).copied().collect(),
-        residual_base: r_base.iter().step_by(step).copied().collect(),
+        residual_base: residual_base_trace,
         residual_extended: r_ext.iter().step_by(step).copied().collect(),
     };
     let verdict = if ambiguity.is_some() {

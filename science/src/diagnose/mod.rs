@@ -31,6 +31,28 @@ use serde::Serialize;
 
 pub use effects::{Effect, EffectKind};
 pub use gate::CannotJudge;
+
+/// Where a diagnosis is, for a progress display (the library never prints): on a log of an hour
+/// at 500 Hz the selection takes seconds per round.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stage {
+    /// The signals, the base fit and its residual analysis.
+    Base,
+    /// Round `round` (from 1) of the forward selection: `done` of `of` candidates tried.
+    Candidates {
+        /// Round, from 1.
+        round: usize,
+        /// Candidates tried so far in this round.
+        done: usize,
+        /// Candidates in this round.
+        of: usize,
+    },
+    /// The extended model's fit, held-out simulation and residual analysis.
+    Extended,
+}
+
+/// A progress callback; it may be called from several threads.
+pub type Observer<'a> = &'a (dyn Fn(Stage) + Sync);
 pub use report::{figure as report_figure, to_text};
 use signals::Signals;
 
@@ -75,12 +97,32 @@ pub struct BaseModel {
     pub mass: f64,
     /// Viscous coefficient (0: the seed's default bound).
     pub c1: f64,
-    /// Drag coefficient [N·m·s²/rad²].
+    /// Drag coefficient of the quadratic law c2·ω|ω| [N·m·s²/rad²], always: for a drag law
+    /// k·|ω|^p (`drag_exponent` named) it is the c2 whose quadratic torque equals k·|ω|^p at the
+    /// data's RMS speed, and `k` and `p` hold the law itself.
     pub c2: f64,
     /// Standard error of J.
     pub mass_stderr: f64,
     /// Standard error of c2.
     pub c2_stderr: f64,
+    /// k of a drag law k·|ω|^p [N·m·(s/rad)^p] (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// p of a drag law k·|ω|^p (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p: Option<f64>,
+}
+
+impl BaseModel {
+    /// A drag law k·|ω|^p as its quadratic-equivalent c2 at the RMS speed `w_rms`.
+    pub(crate) fn power_law(mut self, k: f64, k_stderr: f64, p: f64, w_rms: f64) -> BaseModel {
+        let scale = w_rms.powf(p - 2.0);
+        self.c2 = k * scale;
+        self.c2_stderr = k_stderr * scale;
+        self.k = Some(k);
+        self.p = Some(p);
+        self
+    }
 }
 
 /// A named effect with its estimated parameter.
@@ -320,22 +362,39 @@ fn time_base(rows: &[Row]) -> Option<(f64, f64)> {
 /// acceleration per device second, so J and c2 come out (1 + ε)² too large; when ε is at least
 /// [`MIN_TIME_BASE`] and ten standard errors, it is named `time_base` and the samples are
 /// converted to host seconds before the diagnosis.
-pub fn diagnose_rows(rows: &[Row], options: Options) -> Result<Report, InputError> {
-    let mut samples: Vec<Sample> = rows.iter().map(|r| r.sample).collect();
+pub fn diagnose_rows(rows: Vec<Row>, options: Options) -> Result<Report, InputError> {
+    diagnose_rows_observed(rows, options, &|_| {})
+}
+
+/// [`diagnose_rows`], telling `progress` where it is.
+pub fn diagnose_rows_observed(
+    rows: Vec<Row>,
+    options: Options,
+    progress: Observer<'_>,
+) -> Result<Report, InputError> {
     // Beyond MAX_TIME_BASE it is not a clock but a unit (t in ms against ts_local in s): left
     // to the gate.
-    let clock = time_base(rows).filter(|(e, se)| {
+    let clock = time_base(&rows).filter(|(e, se)| {
         e.abs() >= MIN_TIME_BASE && e.abs() <= MAX_TIME_BASE && e.abs() > 10.0 * se
     });
-    if let Some((eps, _)) = clock {
-        let r = 1.0 + eps;
-        for s in &mut samples {
-            s.t /= r;
-            s.velocity *= r;
-            s.acceleration *= r * r;
-        }
-    }
-    let mut report = diagnose(&samples, options)?;
+    let no_host_time = rows.iter().all(|r| r.ts_local.is_nan());
+    let r = 1.0 + clock.map_or(0.0, |(eps, _)| eps);
+    // Consumes the rows (the allocation is reused where the layout allows): an hour-long log is
+    // held once, not as rows, samples and complete samples side by side.
+    let samples: Vec<Sample> = rows
+        .into_iter()
+        .map(|row| {
+            let mut s = row.sample;
+            if clock.is_some() {
+                s.t /= r;
+                s.velocity *= r;
+                s.acceleration *= r * r;
+            }
+            s
+        })
+        .filter(Sample::is_finite)
+        .collect();
+    let mut report = diagnose_complete(samples, options, progress)?;
     match clock {
         Some((eps, se)) if !matches!(report.verdict, Verdict::CannotJudge { .. }) => {
             report.effects.insert(
@@ -356,7 +415,7 @@ pub fn diagnose_rows(rows: &[Row], options: Options) -> Result<Report, InputErro
             }
         }
         Some(_) => {}
-        None if rows.iter().all(|r| r.ts_local.is_nan()) => report
+        None if no_host_time => report
             .notes
             .push("no host time column (ts_local): time_base cannot be tested".into()),
         None => {}
@@ -369,14 +428,29 @@ pub fn diagnose_rows(rows: &[Row], options: Options) -> Result<Report, InputErro
 /// Rows may lack the force (a slow load cell): dynamics are diagnosed on the rows that have it;
 /// when those cannot identify the inertia (steady plateaus), the drag law is diagnosed instead.
 pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputError> {
-    let complete: Vec<Sample> = samples.iter().copied().filter(Sample::is_finite).collect();
+    diagnose_complete(
+        samples.iter().copied().filter(Sample::is_finite).collect(),
+        options,
+        &|_| {},
+    )
+}
+
+/// [`diagnose`] on complete samples, which it consumes: they are dropped once the signals are
+/// built (the working set of a long log is the signals' seven columns, not three copies of it).
+fn diagnose_complete(
+    complete: Vec<Sample>,
+    options: Options,
+    progress: Observer<'_>,
+) -> Result<Report, InputError> {
+    progress(Stage::Base);
     let columns = effects::widest(options.max_effects);
     let why = gate::check(&complete, columns);
+    let extent = Extent::of(&complete);
     if !why.is_empty() {
-        return Ok(Report::cannot_judge(&complete, why));
+        return Ok(Report::cannot_judge(extent, why));
     }
-    let signals = Signals::new(&complete)?;
-    let report = match effects::run(&signals, options) {
+    let signals = Signals::new(complete)?;
+    let report = match effects::run(&signals, options, progress) {
         Ok(mut r) => {
             r.steady_state = steady::drag_law(&signals).filter(|_| r.steady_share > STEADY_SHARE);
             r
@@ -386,7 +460,7 @@ pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputErr
             None => {
                 let condition_number = gate::condition_number(&signals.force, &signals.velocity);
                 let mut r = Report::cannot_judge(
-                    &complete,
+                    extent,
                     vec![CannotJudge::NoExcitation { condition_number }],
                 );
                 r.notes.push(dynamics.0);
@@ -394,7 +468,7 @@ pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputErr
             }
         },
     };
-    let mut report = report.checked(&complete);
+    let mut report = report.checked(extent);
     if !matches!(report.verdict, Verdict::CannotJudge { .. }) {
         report.notes.push(
             "torque_scale cannot be tested: these data have no independent torque reference (a load cell \
@@ -406,26 +480,44 @@ pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputErr
     Ok(report)
 }
 
+/// How many samples a recording has and the time they span (what a report says of data it could
+/// not judge).
+#[derive(Clone, Copy, Debug)]
+struct Extent {
+    samples: usize,
+    duration_s: f64,
+}
+
+impl Extent {
+    fn of(samples: &[Sample]) -> Extent {
+        let n = samples.len();
+        Extent {
+            samples: n,
+            duration_s: if n > 1 {
+                samples[n - 1].t - samples[0].t
+            } else {
+                0.0
+            },
+        }
+    }
+}
+
 impl Report {
     /// A report that concludes nothing, for data the gate rejects.
-    fn cannot_judge(samples: &[Sample], reasons: Vec<CannotJudge>) -> Report {
+    fn cannot_judge(extent: Extent, reasons: Vec<CannotJudge>) -> Report {
         let nan = BaseModel {
             mass: f64::NAN,
             c1: f64::NAN,
             c2: f64::NAN,
             mass_stderr: f64::NAN,
             c2_stderr: f64::NAN,
-        };
-        let n = samples.len();
-        let duration_s = if n > 1 {
-            samples[n - 1].t - samples[0].t
-        } else {
-            0.0
+            k: None,
+            p: None,
         };
         Report {
             verdict: Verdict::CannotJudge { reasons },
-            samples: n,
-            duration_s,
+            samples: extent.samples,
+            duration_s: extent.duration_s,
             rate_hz: f64::NAN,
             base: nan.clone(),
             effects: Vec::new(),
@@ -452,7 +544,7 @@ impl Report {
     }
 
     /// The gate after the fit: a verdict stands only on finite parameters and errors.
-    fn checked(self, samples: &[Sample]) -> Report {
+    fn checked(self, extent: Extent) -> Report {
         if matches!(self.verdict, Verdict::CannotJudge { .. }) {
             return self;
         }
@@ -473,13 +565,18 @@ impl Report {
         fitted.extend(self.effects.iter().map(|e| (e.name, e.value)));
         match fitted.iter().find(|(_, v)| !v.is_finite()) {
             Some((what, _)) => {
-                let mut r = Report::cannot_judge(samples, vec![CannotJudge::NonFinite { what }]);
+                let mut r = Report::cannot_judge(extent, vec![CannotJudge::NonFinite { what }]);
                 r.notes = self.notes;
                 r
             }
             None => self,
         }
     }
+}
+
+/// Root mean square of `x`.
+pub(crate) fn rms(x: &[f64]) -> f64 {
+    (x.iter().map(|v| v * v).sum::<f64>() / x.len().max(1) as f64).sqrt()
 }
 
 fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
@@ -509,9 +606,10 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
         samples: n,
         duration_s: s.t[n - 1] - s.t[0],
         rate_hz: s.rate,
-        base: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.c2, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        base: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.c2, mass_stderr: f64::NAN, c2_stderr: f64::NAN, k: None, p: None },
         effects,
-        extended: BaseModel { mass: f64::NAN, c1: 0.0, c2: law.k, mass_stderr: f64::NAN, c2_stderr: f64::NAN },
+        extended: BaseModel { mass: f64::NAN, c1: 0.0, c2: f64::NAN, mass_stderr: f64::NAN, c2_stderr: f64::NAN, k: None, p: None }
+            .power_law(law.k, f64::NAN, law.exponent, rms(&s.velocity)),
         simulation_rms: SimulationRms {
             base: law.rms_seed,
             extended: law.rms_extended,

@@ -81,6 +81,11 @@ pub fn to_text(r: &Report, source: &str) -> String {
             "   Extended model: J = {:.4e} ± {:.1e} kg·m², c1 = {:.3e}, c2 = {:.4e} ± {:.1e}\n",
             x.mass, x.mass_stderr, x.c1, x.c2, x.c2_stderr
         );
+        if let (Some(k), Some(p)) = (x.k, x.p) {
+            s += &format!(
+                "   Drag law: {k:.4e}·|ω|^{p:.3} (c2 above is its quadratic equivalent at the RMS speed)\n"
+            );
+        }
     }
     s += &format!(
         "   Simulated-velocity RMS error on held-out data: base {:.3} → extended {:.3} rad/s (gain {:.1} %)\n",

@@ -14,6 +14,8 @@ pub struct Signals {
     pub force: Vec<f64>,
     /// Velocity [rad/s].
     pub velocity: Vec<f64>,
+    /// ln|velocity| (−∞ at rest), for drag laws |ω|^p = exp(p·ln|ω|).
+    pub log_speed: Vec<f64>,
     /// Reported acceleration [rad/s²].
     pub acceleration: Vec<f64>,
     /// Rotor angle [rad], if the recording has it.
@@ -22,11 +24,8 @@ pub struct Signals {
     pub force_rate: Vec<f64>,
     /// d(acceleration)/dt, the same way [rad/s³].
     pub jerk: Vec<f64>,
-    /// Instrument for Ḟ: the difference quotient of the force samples just outside the slope's
-    /// window (independent noise, the same change).
-    pub force_rate_instrument: Vec<f64>,
-    /// The same for ȧ.
-    pub jerk_instrument: Vec<f64>,
+    /// Half-width of the slopes' window in samples (the instruments reach one sample beyond it).
+    pub slope_half_width: usize,
     /// Whether the rotor is slowing down at each sample: the slope of the measured velocity over
     /// ±20 ms opposes the velocity (not the reported acceleration, whose noise is in the
     /// equation's left-hand side).
@@ -64,29 +63,27 @@ fn local_slope(t: &[f64], x: &[f64], h: usize) -> Vec<f64> {
         .collect()
 }
 
-/// The instrument of a local slope over ±h samples: the difference quotient of the samples just
-/// outside that window, (x[i+g] − x[i−g]) / (t[i+g] − t[i−g]) with g = h + 1 (one-sided at the
-/// ends). It shares no sample with the slope at i (independent noise) and sees the same change,
-/// a smooth one or a step.
-fn instrument(t: &[f64], x: &[f64], g: usize) -> Vec<f64> {
+/// The instrument of a local slope over ±h samples at `i`: the difference quotient of the samples
+/// just outside that window, (x[i+g] − x[i−g]) / (t[i+g] − t[i−g]) with g = h + 1 (one-sided at
+/// the ends). It shares no sample with the slope at i (independent noise) and sees the same
+/// change, a smooth one or a step. Computed where it is used: two more columns of n would cost
+/// 32 MB on a 2-million-row log.
+fn instrument(t: &[f64], x: &[f64], g: usize, i: usize) -> f64 {
     let n = x.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (i.saturating_sub(g), (i + g).min(n - 1));
-            let dt = t[b] - t[a];
-            if dt > 0.0 && a != b {
-                (x[b] - x[a]) / dt
-            } else {
-                0.0
-            }
-        })
-        .collect()
+    let (a, b) = (i.saturating_sub(g), (i + g).min(n - 1));
+    let dt = t[b] - t[a];
+    if dt > 0.0 && a != b {
+        (x[b] - x[a]) / dt
+    } else {
+        0.0
+    }
 }
 
 impl Signals {
     /// Builds the signals; the samples must be complete (finite t, force, velocity,
-    /// acceleration) and in time order.
-    pub fn new(samples: &[Sample]) -> Result<Signals, InputError> {
+    /// acceleration) and in time order. They are consumed: dropped as soon as their columns are
+    /// taken, before the derived signals are computed (the peak memory of a long log).
+    pub fn new(samples: Vec<Sample>) -> Result<Signals, InputError> {
         const MIN_SAMPLES: usize = 200;
         if samples.len() < MIN_SAMPLES {
             return Err(InputError(format!(
@@ -103,6 +100,14 @@ impl Signals {
             )));
         }
         let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
+        let force: Vec<f64> = samples.iter().map(|s| s.force).collect();
+        let acceleration: Vec<f64> = samples.iter().map(|s| s.acceleration).collect();
+        let velocity: Vec<f64> = samples.iter().map(|s| s.velocity).collect();
+        let position: Option<Vec<f64>> = samples
+            .iter()
+            .all(|s| s.position.is_finite())
+            .then(|| samples.iter().map(|s| s.position).collect());
+        drop(samples);
         let mut dts: Vec<f64> = t
             .windows(2)
             .map(|w| w[1] - w[0])
@@ -111,22 +116,16 @@ impl Signals {
         if dts.is_empty() {
             return Err(InputError("all samples have the same time".into()));
         }
-        dts.sort_by(f64::total_cmp);
-        let rate = 1.0 / dts[dts.len() / 2];
-        let force: Vec<f64> = samples.iter().map(|s| s.force).collect();
-        let acceleration: Vec<f64> = samples.iter().map(|s| s.acceleration).collect();
+        let mid = dts.len() / 2;
+        let rate = 1.0 / *dts.select_nth_unstable_by(mid, f64::total_cmp).1;
+        drop(dts);
         let h = ((DERIVATIVE_HALF_WINDOW * rate).round() as usize).max(1);
-        let position = samples
-            .iter()
-            .all(|s| s.position.is_finite())
-            .then(|| samples.iter().map(|s| s.position).collect());
         let warm_up = t[0] + 0.5;
         let first = t
             .iter()
             .position(|x| *x >= warm_up)
             .unwrap_or(0)
             .min(t.len() / 2);
-        let velocity: Vec<f64> = samples.iter().map(|s| s.velocity).collect();
         let slowing = local_slope(&t, &velocity, 2 * h);
         let decelerating = slowing
             .iter()
@@ -137,8 +136,8 @@ impl Signals {
         let jerk = local_slope(&t, &acceleration, h);
         Ok(Signals {
             first,
-            force_rate_instrument: instrument(&t, &force, h + 1),
-            jerk_instrument: instrument(&t, &acceleration, h + 1),
+            slope_half_width: h,
+            log_speed: velocity.iter().map(|w| w.abs().ln()).collect(),
             force_rate,
             jerk,
             velocity,
@@ -151,21 +150,42 @@ impl Signals {
         })
     }
 
+    /// Instrument for Ḟ at sample `i`: the difference quotient of the force samples just outside
+    /// the slope's window (independent noise, the same change).
+    pub fn force_rate_instrument(&self, i: usize) -> f64 {
+        instrument(&self.t, &self.force, self.slope_half_width + 1, i)
+    }
+
+    /// The same for ȧ.
+    pub fn jerk_instrument(&self, i: usize) -> f64 {
+        instrument(&self.t, &self.acceleration, self.slope_half_width + 1, i)
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t.len()
     }
 
-    /// The reported torque through a causal first-order lag of time constant `lag`.
+    /// The reported torque through a causal first-order lag of time constant `lag`, discretised
+    /// with a first-order hold (the torque taken as linear between samples, exact for a
+    /// continuous torque; a zero-order hold would apply each sample over the interval before it
+    /// and make every fitted lag half a sample long).
     pub fn lagged_force(&self, lag: f64) -> Vec<f64> {
-        let mut y = self.force[0];
         let mut out = Vec::with_capacity(self.len());
-        for i in 0..self.len() {
-            if i > 0 && lag > 0.0 {
-                let dt = self.t[i] - self.t[i - 1];
-                y += (1.0 - (-dt / lag).exp()) * (self.force[i] - y);
-            } else if lag <= 0.0 {
-                y = self.force[i];
+        if lag <= 0.0 {
+            out.extend_from_slice(&self.force);
+            return out;
+        }
+        let mut y = self.force[0];
+        out.push(y);
+        for i in 1..self.len() {
+            let dt = self.t[i] - self.t[i - 1];
+            let (x0, x1) = (self.force[i - 1], self.force[i]);
+            if dt > 0.0 {
+                // y' = (x − y)/L with x linear from x0 to x1 over dt, solved exactly.
+                let e = (-dt / lag).exp();
+                let slope = (x1 - x0) / dt;
+                y = x1 - lag * slope + e * (y - x0 + lag * slope);
             }
             out.push(y);
         }

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# `propid diagnose` on an hour-long log: 2,000,000 rows (4000 s at 500 Hz, the seed's sine, an
+# 8 ms torque lag hidden) written by the stand simulator, timed as a whole process; median wall
+# and CPU time (user + sys) of several runs and the peak RSS, for this build and, with
+# BEFORE=path, another build on the same file in the same run.
+#
+# usage: benches/diagnose_long.sh [RUNS]      (default 3)
+#   BEFORE=path   also time another propid binary (e.g. an older build)
+#   SMOKE=1       20,000 rows, one run: checks that the script works (CI)
+# Needs GNU time (/usr/bin/time).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+runs=${1:-3}
+cargo build --release -q -p propid
+P=${CARGO_TARGET_DIR:-target}/release/propid
+dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+rows=2000000
+if [ "${SMOKE:-0}" = 1 ]; then rows=20000; runs=1; fi
+$P sim --rate 500 --duration $((rows / 500)) --torque-lag 0.008 --seed 7 -o "$dir/long.tsv" 2>/dev/null
+median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+measure() {
+  local bin=$1 walls=() cpus=() rss=0
+  for _ in $(seq "$runs"); do
+    /usr/bin/time -f '%e %U %S %M' -o "$dir/t" "$bin" diagnose "$dir/long.tsv" > "$dir/out" 2>/dev/null
+    read -r wall user sys kib < "$dir/t"
+    walls+=("$wall"); cpus+=("$(echo "$user + $sys" | bc)")
+    [ "$kib" -gt "$rss" ] && rss=$kib
+  done
+  printf '%s\t%s\t%s\t%s\n' "$(printf '%s\n' "${walls[@]}" | median)" \
+    "$(printf '%s\n' "${cpus[@]}" | median)" "$((rss / 1024))" "$(grep -c . "$dir/out")"
+}
+echo "diagnose on $rows rows ($(stat -c %s "$dir/long.tsv") bytes), median of $runs runs"
+printf 'program\twall s\tCPU s\tpeak RSS MiB\treport lines\n'
+printf 'propid diagnose\t%s\n' "$(measure "$P")"
+if [ -n "${BEFORE:-}" ]; then printf 'before\t%s\n' "$(measure "$BEFORE")"; fi
+grep -q "torque_lag .*← named" "$dir/out" || { echo "the hidden torque lag was not named" >&2; exit 1; }
