@@ -3,5 +3,9 @@
 # pycyphal[transport-can-pythoncan] and socat): values both ways at a 50 ms setpoint period, and the
 # seed's 5 ms period, which python-can's slcan reader may not drain: the run completes, drops are
 # reported, and PyCyphal's last readiness is STANDBY and its last setpoint zero.
+# Then congestion for real (tests/pycyphal/slowbus.py, a 125 kbit/s bus between propid and
+# PyCyphal that also stops for a second): the run completes, a SIGINT mid-stall and the end of the
+# pattern both leave STANDBY and zero last at PyCyphal, a killed relay stops propid with whole rows.
 set -euo pipefail
 cargo test -q -p propid --test pycyphal_interop -- --ignored
+cargo test -q -p propid --test pycyphal_congestion -- --ignored --test-threads=1

@@ -564,7 +564,12 @@ impl Drive {
         if let Some(s) = &self.stopping {
             if self.phase == Phase::Stopping {
                 let (until, repeats_left, next) = (s.until, s.repeats_left, s.next);
-                if repeats_left > 0 && now >= next {
+                // A repeat waits until the one before it has left: repeats queued behind a
+                // congested link would supersede each other and leave as one transfer, which a
+                // receiver discards when its transfer-ID equals the last one it took (PyCyphal
+                // and libcanard deduplicate so; 1 in 32 after a gap). Repeats that leave one by
+                // one have consecutive transfer-IDs, so at most the first can be discarded.
+                if repeats_left > 0 && now >= next && self.nothing_waiting() {
                     let deadline = until.saturating_duration_since(now);
                     self.publish(now, Readiness::STANDBY, 0.0, deadline);
                     let period = Duration::from_secs_f64(self.cfg.setpoint_period);
@@ -574,13 +579,17 @@ impl Drive {
                     }
                 }
                 let left = self.stopping.as_ref().map_or(0, |s| s.repeats_left);
-                let drained =
-                    left == 0 && self.held.is_none() && self.node.is_transmit_queue_empty();
+                let drained = left == 0 && self.nothing_waiting();
                 if drained || now >= until {
                     self.finish(now);
                 }
             }
         }
+    }
+
+    /// Nothing is queued or held for the link.
+    fn nothing_waiting(&self) -> bool {
+        self.held.is_none() && self.node.is_transmit_queue_empty()
     }
 
     fn finish(&mut self, now: Instant) {
@@ -774,7 +783,9 @@ impl Drive {
                 match (&self.stopping, self.phase) {
                     (Some(s), Phase::Stopping) => {
                         let mut t = t.min(s.until);
-                        if s.repeats_left > 0 {
+                        // (A repeat due but waiting for the one before it wakes nobody: the
+                        // link's retry does.)
+                        if s.repeats_left > 0 && self.nothing_waiting() {
                             t = t.min(s.next);
                         }
                         Some(t)

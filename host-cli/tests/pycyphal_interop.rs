@@ -5,7 +5,8 @@
 //! A second run uses the seed's own 5 ms setpoint period, which python-can's slcan reader may not
 //! drain (it reads more slowly than propid writes, above all while it starts): the run completes,
 //! the summary reports what was dropped, and PyCyphal's last readiness is STANDBY, its last
-//! setpoint zero. (The deterministic congestion test is `drive/tests/virtual_run.rs`.)
+//! setpoint zero. (A really congested bus: `pycyphal_congestion.rs`; in virtual time:
+//! `drive/tests/virtual_run.rs`.)
 //! Needs python3 with `pycyphal[transport-can-pythoncan]` and socat: `#[ignore]`d, run explicitly
 //! by ci/steps/30-pycyphal.sh (`cargo test -p propid --test pycyphal_interop -- --ignored`).
 

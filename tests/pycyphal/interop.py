@@ -4,13 +4,15 @@ of a pseudo-terminal pair; `propid drive` on the other.
 
 PyCyphal (node 20) publishes DoF3rdTs on subject 110 at 100 Hz with known values (velocity = k,
 force = k/1000, timestamp = k·10 ms) and a Heartbeat; it subscribes to Readiness (subject 10) and
-Vector31 (subject 24) and prints what it received as JSON at the end, with the values it sent.
+Vector31 (subject 24) and prints what it received as JSON at the end (with the wall time, time.time(),
+of each reception), with the values it sent (and the wall time of each publication).
 
 usage: interop.py COMPILED_DIR IFACE SECONDS
 """
 import asyncio
 import json
 import sys
+import time
 
 sys.path.insert(0, sys.argv[1])
 import pycyphal  # noqa: E402
@@ -32,13 +34,15 @@ async def main() -> None:
     pub_hb = pres.make_publisher(uavcan.node.Heartbeat_1, 7509)
     sub_ready = pres.make_subscriber(zubax.service.Readiness_1, 10)
     sub_sp = pres.make_subscriber(zubax.primitive.real16.Vector31_1, 24)
-    readiness, setpoints = [], []
+    readiness, setpoints, readiness_t, setpoints_t = [], [], [], []
 
     async def on_ready(msg, _meta):
         readiness.append(int(msg.value))
+        readiness_t.append(time.time())
 
     async def on_sp(msg, _meta):
         setpoints.append([float(x) for x in msg.value])
+        setpoints_t.append(time.time())
 
     sub_ready.receive_in_background(on_ready)
     sub_sp.receive_in_background(on_sp)
@@ -60,13 +64,25 @@ async def main() -> None:
             ),
         )
         await pub_fb.publish(fb)
-        sent.append({"t": k * 0.01, "velocity": float(k), "acceleration": float(-k), "force": k / 1000.0})
+        sent.append(
+            {"t": k * 0.01, "velocity": float(k), "acceleration": float(-k), "force": k / 1000.0, "wall": time.time()}
+        )
         if k % 100 == 1:
             await pub_hb.publish(uavcan.node.Heartbeat_1(uptime=k // 100))
         await asyncio.sleep(0.01)
     await asyncio.sleep(1.0)
     pres.close()
-    print(json.dumps({"sent": sent, "readiness": readiness, "setpoints": setpoints}))
+    print(
+        json.dumps(
+            {
+                "sent": sent,
+                "readiness": readiness,
+                "setpoints": setpoints,
+                "readiness_t": readiness_t,
+                "setpoints_t": setpoints_t,
+            }
+        )
+    )
 
 
 asyncio.run(main())

@@ -457,7 +457,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
                 .link
                 .link_fault
                 .as_ref()
-                .map(|f| format!("; the link failed: {f}"))
+                .map(|f| format!(
+                    "; the link failed: {f}; {} frames after that never written",
+                    outcome.link.lost_to_fault
+                ))
                 .unwrap_or_default()
         )
     };
