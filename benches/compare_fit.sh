@@ -33,7 +33,7 @@ if [ "$(stat -c %s "$dir/mib.tsv")" -lt $(((mib << 20) * 9 / 10)) ]; then
   head -c $((mib << 20)) "$dir/big.tsv" | head -n -1 > "$dir/mib.tsv"
 fi
 
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+. benches/common.sh
 # time_runs N command... → "median-wall median-cpu peak-RSS-KiB": wall and CPU (user + sys) from
 # bash's `time` (ms resolution) over N runs, the RSS from one more run under GNU time (not for
 # the seed, run through sh: its minutes on the large file are not repeated for that).

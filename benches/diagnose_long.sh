@@ -18,7 +18,7 @@ trap 'rm -rf "$dir"' EXIT
 rows=2000000
 if [ "${SMOKE:-0}" = 1 ]; then rows=20000; runs=1; fi
 $P sim --rate 500 --duration $((rows / 500)) --torque-lag 0.008 --seed 7 -o "$dir/long.tsv" 2>/dev/null
-median() { sort -g | awk '{a[NR]=$1} END {print (NR%2) ? a[(NR+1)/2] : (a[NR/2]+a[NR/2+1])/2}'; }
+. benches/common.sh
 measure() {
   local bin=$1 walls=() cpus=() rss=0
   for _ in $(seq "$runs"); do

@@ -27,7 +27,7 @@ use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use common::{repo, require_python};
+use common::{compile_pycyphal_dsdl, repo, require_python};
 
 /// The slow bus [bit/s].
 const BUS_BITRATE: &str = "125000";
@@ -60,19 +60,7 @@ fn compiled_dsdl() -> &'static Path {
     static DIR: OnceLock<PathBuf> = OnceLock::new();
     DIR.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
-        let dsdl = repo().join("tests/pycyphal/dsdl");
-        let status = Command::new("python3")
-            .arg("-c")
-            .arg(format!(
-                "import pycyphal.dsdl as d; d.compile('{u}', output_directory='{o}'); \
-                 d.compile('{z}', lookup_directories=['{u}'], output_directory='{o}')",
-                u = dsdl.join("uavcan").display(),
-                z = dsdl.join("zubax").display(),
-                o = dir.display()
-            ))
-            .status()
-            .unwrap();
-        assert!(status.success(), "DSDL compilation");
+        compile_pycyphal_dsdl(&dir);
         dir
     })
 }

@@ -15,7 +15,7 @@ mod common;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use common::{python_has, repo};
+use common::{compile_pycyphal_dsdl, python_has, repo};
 
 /// What one run against PyCyphal produced.
 struct Interop {
@@ -41,19 +41,7 @@ fn run_against_pycyphal(setpoint_period: &str) -> Interop {
     assert!(has_socat, "socat is needed");
     let dir = tempfile::tempdir().unwrap();
     let compiled = dir.path().join("compiled");
-    let dsdl = repo().join("tests/pycyphal/dsdl");
-    let status = Command::new("python3")
-        .arg("-c")
-        .arg(format!(
-            "import pycyphal.dsdl as d; d.compile('{u}', output_directory='{o}'); \
-             d.compile('{z}', lookup_directories=['{u}'], output_directory='{o}')",
-            u = dsdl.join("uavcan").display(),
-            z = dsdl.join("zubax").display(),
-            o = compiled.display()
-        ))
-        .status()
-        .unwrap();
-    assert!(status.success(), "DSDL compilation");
+    compile_pycyphal_dsdl(&compiled);
     let (a, b) = (dir.path().join("ttyA"), dir.path().join("ttyB"));
     let mut socat = Command::new("socat")
         .arg(format!("pty,raw,echo=0,link={}", a.display()))

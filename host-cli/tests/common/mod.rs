@@ -78,3 +78,20 @@ pub fn yaml_value(text: &str, key: &str) -> f64 {
         })
         .unwrap_or_else(|| panic!("no `{key}` in:\n{text}"))
 }
+
+/// Compiles the repo's DSDL (uavcan, then zubax) for PyCyphal into `out`; panics if it fails.
+pub fn compile_pycyphal_dsdl(out: &Path) {
+    let dsdl = repo().join("tests/pycyphal/dsdl");
+    let status = Command::new("python3")
+        .arg("-c")
+        .arg(format!(
+            "import pycyphal.dsdl as d; d.compile('{u}', output_directory='{o}'); \
+             d.compile('{z}', lookup_directories=['{u}'], output_directory='{o}')",
+            u = dsdl.join("uavcan").display(),
+            z = dsdl.join("zubax").display(),
+            o = out.display()
+        ))
+        .status()
+        .unwrap();
+    assert!(status.success(), "DSDL compilation");
+}
