@@ -103,13 +103,23 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
                 // force offset: both are one constant torque, on any pattern.
                 let constant =
                     a.between.contains(&"coulomb_friction") && a.between.contains(&"force_offset");
+                // On the seed's sine a lag and a constant torque are spanned by the same
+                // harmonics (docs/SCIENCE.md): any ambiguity with the right one among the two.
                 let allowed = match (e.ambiguous_with, p) {
+                    (_, Pattern::Sine) => true,
                     (Some((other, _)), _) => a.between.contains(&other),
                     _ if constant => true,
-                    (None, Pattern::Sine) => true,
                     (None, Pattern::Chirp) => false,
                 };
-                match a.between.iter().position(|n| *n == e.name) {
+                // The scenario's stated equivalent stands in for the effect (a positive offset
+                // is a Coulomb friction of the same size on a rotor that never reverses).
+                let stand_in = e.ambiguous_with.map(|(other, _)| other);
+                match a
+                    .between
+                    .iter()
+                    .position(|n| *n == e.name)
+                    .or_else(|| a.between.iter().position(|n| Some(*n) == stand_in))
+                {
                     Some(k) if allowed => Some(a.values[k]),
                     _ => {
                         bad.push(format!(
@@ -173,6 +183,23 @@ fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
                     format!("WRONG: {}", bad.join("; "))
                 }
             ));
+            if !bad.is_empty() && std::env::var_os("PROPID_SWEEP_VERBOSE").is_some() {
+                for c in &r.candidates {
+                    say(format!(
+                        "      {:<18} cv {:+7.2} % folds {} value {:.4e} sim {:+7.2} % {}{}",
+                        c.name,
+                        c.cv_gain_percent,
+                        c.folds_better,
+                        c.value,
+                        c.simulation_gain_percent,
+                        if c.selected { "SELECTED " } else { "" },
+                        c.note
+                    ));
+                }
+                for n in &r.notes {
+                    say(format!("      note: {n}"));
+                }
+            }
             failures.extend(
                 bad.into_iter()
                     .map(|b| format!("{} {p:?} {rate} Hz: {b}", h.name())),
@@ -221,4 +248,39 @@ fn mechanisms_diagnose_still_gets_wrong() {
         20261123,
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every mechanism over several rng seeds (`PROPID_SWEEP=N`, default 4, from seed 1): how often
+/// each is right, for finding the draws a fixed seed does not reach. Never asserts; run with
+/// `-- --ignored --nocapture sweep`.
+#[test]
+#[ignore = "an exploration aid: prints a table, asserts nothing"]
+fn sweep() {
+    let n: u64 = std::env::var("PROPID_SWEEP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    let only = std::env::var("PROPID_SWEEP_ONLY").ok();
+    let mut table = Vec::new();
+    for h in Hidden::ALL {
+        // Effects outside the library are judged by another test (the report says "unexplained").
+        if matches!(
+            h,
+            Hidden::PeriodicDisturbance | Hidden::Gust | Hidden::VoltageLimit
+        ) {
+            continue;
+        }
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|x| x == h.name()))
+        {
+            continue;
+        }
+        let mut wrong = 0;
+        for seed in 1..=n {
+            wrong += usize::from(!check(&[h], seed).is_empty());
+        }
+        table.push(format!("{:<22} wrong on {wrong} of {n} seeds", h.name()));
+    }
+    say(table.join("\n"));
 }
