@@ -209,44 +209,51 @@ fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
     failures
 }
 
-/// The mechanisms diagnose gets right on the sine and on a chirp.
+/// The mechanisms diagnose gets right on the sine and on a chirp, on four independent draws each
+/// (magnitudes, rates and noise; the `sweep` below found them right on ten draws per mechanism).
 #[test]
 fn mechanisms_are_named_and_measured() {
-    let failures = check(
-        &[
-            Hidden::Clean,
-            Hidden::CurrentLoopMeasured,
-            Hidden::ForceOffset,
-            Hidden::ClockRate,
-            Hidden::KtError,
-            Hidden::ReynoldsDrag,
-            Hidden::DroppedMessages,
-            Hidden::TimestampJitter,
-        ],
-        20261123,
-    );
+    let mut failures = Vec::new();
+    for seed in [20261123, 1, 2, 3] {
+        failures.extend(check(
+            &[
+                Hidden::Clean,
+                Hidden::CurrentLoopMeasured,
+                Hidden::ForceOffset,
+                Hidden::ClockRate,
+                Hidden::KtError,
+                Hidden::Stribeck,
+                Hidden::DroppedMessages,
+                Hidden::TimestampJitter,
+            ],
+            seed,
+        ));
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
 /// cannot find"); run with `-- --ignored` to see where each stands.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: filters and observers right on some draws and not on others, a current loop faster than a third of a sample interval, a load cell's second-order stage at 100 Hz, braking drags in a second effect, viscous vs drag exponent, cogging and Stribeck on the sine"]
+#[ignore = "known failures, see docs/SCIENCE.md: braking and acceleration filters wrong on some draws (a false braking on a filtered acceleration at 100 Hz, a 13 % short braking torque beside a drag exponent), a long current-sense filter on the sine at 100 Hz, a current loop faster than half a sample interval, a fast velocity observer on the sine, a load cell held at 40-100 Hz, viscous friction and a drag exponent ambiguous among the drag shapes on a chirp that never reaches low speed, cogging aliased at 250 Hz"]
 fn mechanisms_diagnose_still_gets_wrong() {
-    let failures = check(
-        &[
-            Hidden::CurrentSenseFilter,
-            Hidden::AccelerationFilter,
-            Hidden::CurrentLoopDemand,
-            Hidden::VelocityObserver,
-            Hidden::LoadCell,
-            Hidden::Braking,
-            Hidden::Viscous,
-            Hidden::Cogging,
-            Hidden::Stribeck,
-        ],
-        20261123,
-    );
+    let mut failures = Vec::new();
+    for seed in [20261123, 1, 2, 3] {
+        failures.extend(check(
+            &[
+                Hidden::CurrentSenseFilter,
+                Hidden::AccelerationFilter,
+                Hidden::Braking,
+                Hidden::CurrentLoopDemand,
+                Hidden::VelocityObserver,
+                Hidden::LoadCell,
+                Hidden::Viscous,
+                Hidden::ReynoldsDrag,
+                Hidden::Cogging,
+            ],
+            seed,
+        ));
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
@@ -277,7 +284,11 @@ fn sweep() {
             continue;
         }
         let mut wrong = 0;
-        for seed in 1..=n {
+        let from: u64 = std::env::var("PROPID_SWEEP_FROM")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1);
+        for seed in from..from + n {
             wrong += usize::from(!check(&[h], seed).is_empty());
         }
         table.push(format!("{:<22} wrong on {wrong} of {n} seeds", h.name()));
