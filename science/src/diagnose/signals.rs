@@ -32,6 +32,10 @@ pub struct Signals {
     pub decelerating: Vec<bool>,
     /// Median sample rate [Hz].
     pub rate: f64,
+    /// The reported acceleration's sample-to-sample noise σ [rad/s²]: from the median absolute
+    /// deviation of a[i] − (a[i−1] + a[i+1])/2 (σ·√1.5 for white noise; robust to the steps a
+    /// braking torque makes).
+    pub acceleration_noise: f64,
     /// First sample the regressions use: the first half second is a warm-up for the lag filters
     /// of the candidate models (their initial state is unknown), so every model is judged on the
     /// same samples.
@@ -132,6 +136,17 @@ impl Signals {
             .zip(&velocity)
             .map(|(d, w)| d * w.signum() < 0.0)
             .collect();
+        let acceleration_noise = {
+            let mut d: Vec<f64> = acceleration
+                .windows(3)
+                .map(|w| (w[1] - 0.5 * (w[0] + w[2])).abs())
+                .collect();
+            let mid = d.len() / 2;
+            match d.is_empty() {
+                true => 0.0,
+                false => 1.4826 * *d.select_nth_unstable_by(mid, f64::total_cmp).1 / 1.5f64.sqrt(),
+            }
+        };
         let force_rate = local_slope(&t, &force, h);
         let jerk = local_slope(&t, &acceleration, h);
         Ok(Signals {
@@ -147,6 +162,7 @@ impl Signals {
             acceleration,
             position,
             rate,
+            acceleration_noise,
         })
     }
 
@@ -161,16 +177,10 @@ impl Signals {
         instrument(&self.t, &self.acceleration, self.slope_half_width + 1, i)
     }
 
-    /// How fast the drive sees the rotor slowing at sample `i` [rad/s²], as a drive's braking
-    /// logic does: the mean of the neighbouring samples' reported accelerations, against the
-    /// velocity (positive: slowing). Sharp where a braking torque switches (it steps the
-    /// acceleration), unlike the ±20 ms velocity slope of `decelerating`; the sample's own
-    /// acceleration, the equation's left-hand side, is left out, so its noise does not choose
-    /// the samples it is compared on.
+    /// How fast the rotor is slowing at sample `i` by its reported acceleration [rad/s²]
+    /// (positive: slowing).
     pub fn slowing(&self, i: usize) -> f64 {
-        let n = self.len();
-        let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
-        -0.5 * (self.acceleration[a] + self.acceleration[b]) * self.velocity[i].signum()
+        -self.acceleration[i] * self.velocity[i].signum()
     }
 
     /// Number of samples.
