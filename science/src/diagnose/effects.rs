@@ -19,8 +19,8 @@ use propid_core::estimate::NormalEquations;
 use super::signals::{correlation, Signals};
 use super::{
     Ambiguity, BaseModel, CandidateScore, Concentration, NamedEffect, Options, Report,
-    ResidualAnalysis, SimulationRms, Traces, Unexplained, Verdict, CONCENTRATED, FOLDS, HOLDOUT,
-    MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
+    ResidualAnalysis, SeparatingRun, SimulationRms, Traces, Unexplained, Verdict, CONCENTRATED,
+    FOLDS, HOLDOUT, MAX_SIM_LOSS, MIN_FOLDS_BETTER, MIN_GAIN,
 };
 use super::{Observer, Stage};
 use propid_io::InputError;
@@ -1097,21 +1097,46 @@ pub const AMBIGUOUS: f64 = 0.02;
 /// the one with the smaller acceleration gain (see `run`).
 pub const AMBIGUOUS_ACROSS: f64 = 0.5;
 
-/// The `propid drive` pattern that tells `a` from `b`.
-fn separating_pattern(a: EffectKind, b: EffectKind) -> &'static str {
+/// The `propid drive` run that tells `a` from `b`.
+fn separating_run(a: EffectKind, b: EffectKind) -> SeparatingRun {
     use EffectKind::*;
     let pair = |x: EffectKind, y: EffectKind| (a == x && b == y) || (a == y && b == x);
+    // The shapes of the load torque besides c2·ω²: over a narrow band of speeds a constant, ω and
+    // ω^p are nearly the same curve.
+    let shape = |k: EffectKind| {
+        matches!(
+            k,
+            CoulombFriction | ForceOffset | ViscousFriction | DragExponent
+        )
+    };
     if pair(CoulombFriction, ForceOffset) {
-        "a pattern that reverses the rotor (`propid drive --pattern chirp --lo -0.5 --hi 0.9`): \
-         friction changes sign with the rotation, a sensor offset does not"
-    } else if pair(ViscousFriction, DragExponent) {
-        "a pattern that reaches low speeds (`propid drive --pattern steps --lo 0.02 --hi 0.9`): \
-         a viscous torque ∝ ω dominates there, a drag ∝ ω^p does not"
+        SeparatingRun {
+            pattern: "chirp",
+            lo: Some(-0.5),
+            hi: Some(0.9),
+            why: "a pattern that reverses the rotor: friction changes sign with the rotation, a sensor offset does not",
+        }
+    } else if shape(a) && shape(b) {
+        SeparatingRun {
+            pattern: "steps",
+            lo: Some(0.02),
+            hi: Some(0.9),
+            why: "a pattern that reaches low speeds: there a constant torque, one ∝ ω and one ∝ ω^p differ most",
+        }
     } else if a == BrakingTorque || b == BrakingTorque {
-        "`propid drive --pattern steps`: held speeds, then sudden slowing, where only braking acts"
+        SeparatingRun {
+            pattern: "steps",
+            lo: None,
+            hi: None,
+            why: "held speeds, then sudden slowing, where only braking acts",
+        }
     } else {
-        "`propid drive --pattern chirp`: a sweep of frequencies, over which a lag's effect grows \
-         and a friction's or drag's does not"
+        SeparatingRun {
+            pattern: "chirp",
+            lo: None,
+            hi: None,
+            why: "a sweep of frequencies, over which a lag's effect grows and a friction's or drag's does not",
+        }
     }
 }
 
@@ -1446,7 +1471,11 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
                 values: [a.value, b.value],
                 units: [a.kind.unit(), b.kind.unit()],
                 cv_gain_percent: [passing[0].2 * 100.0, rival.2 * 100.0],
-                separate_with: separating_pattern(a.kind, b.kind),
+                separate_with: {
+                    let run = separating_run(a.kind, b.kind);
+                    format!("`propid drive {}`: {}", run.flags(), run.why)
+                },
+                separating_run: separating_run(a.kind, b.kind),
             });
             break;
         }
