@@ -133,6 +133,21 @@ pub struct Effect {
     pub kind: EffectKind,
     /// Its nonlinear parameter.
     pub param: f64,
+    /// For a torque lag: the steps of the reported force happened at the samples that first
+    /// show them (a drive that changes its demand in step with its reports), not anywhere in the
+    /// interval before (see [`Signals::lagged_force`]).
+    pub steps_at_samples: bool,
+}
+
+impl Effect {
+    /// `kind` with parameter `param` (steps of the force anywhere between samples).
+    pub fn new(kind: EffectKind, param: f64) -> Effect {
+        Effect {
+            kind,
+            param,
+            steps_at_samples: false,
+        }
+    }
 }
 
 const MAX_COLUMNS: usize = 10;
@@ -273,11 +288,10 @@ impl Model {
         let lag = self
             .effects
             .iter()
-            .find(|e| e.kind == EffectKind::TorqueLag)
-            .map(|e| e.param);
+            .find(|e| e.kind == EffectKind::TorqueLag);
         Prepared {
             force: match lag {
-                Some(l) => std::borrow::Cow::Owned(s.lagged_force(l)),
+                Some(e) => std::borrow::Cow::Owned(s.lagged_force(e.param, e.steps_at_samples)),
                 None => std::borrow::Cow::Borrowed(&s.force),
             },
             exponent: self
@@ -704,10 +718,55 @@ pub(super) fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iteration
 
 /// Chooses the nonlinear parameter of `kind` added to `model` by the held-out error: a grid,
 /// then a refinement between the best point's neighbours.
-fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
+fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<Effect> {
+    if kind == EffectKind::TorqueLag && s.has_force_steps() {
+        // Where the force steps, where in the interval before the sample that shows a step did
+        // it happen? Anywhere (commands asynchronous to the reports: the first-order hold is
+        // right on average), or at that sample (a drive that changes its demand in step with its
+        // reports, as the mechanism stand's staircase does: the hold then places every step
+        // half a sample early, and every lag read from steps came out half a sample long). The
+        // held-out error chooses, each way tuned alone.
+        let anywhere = tune_lag(model, s, false);
+        let at_samples = tune_lag(model, s, true);
+        return match (anywhere, at_samples) {
+            (Some(a), Some(b)) => Some(if b.1 < a.1 { b.0 } else { a.0 }),
+            (a, b) => a.or(b).map(|x| x.0),
+        };
+    }
+    tune_param(model, kind, s, false).map(|(param, _)| Effect {
+        kind,
+        param,
+        steps_at_samples: false,
+    })
+}
+
+/// A torque lag tuned with the force's steps placed one way, and its held-out error.
+fn tune_lag(model: &Model, s: &Signals, steps_at_samples: bool) -> Option<(Effect, f64)> {
+    let (param, mse) = tune_param(model, EffectKind::TorqueLag, s, steps_at_samples)?;
+    Some((
+        Effect {
+            kind: EffectKind::TorqueLag,
+            param,
+            steps_at_samples,
+        },
+        mse,
+    ))
+}
+
+/// The nonlinear parameter of `kind` and the held-out error it gives.
+fn tune_param(
+    model: &Model,
+    kind: EffectKind,
+    s: &Signals,
+    steps_at_samples: bool,
+) -> Option<(f64, f64)> {
     let score = |x: f64| {
         model
-            .with(Effect { kind, param: x })
+            .with(Effect {
+                kind,
+                param: x,
+                steps_at_samples,
+            })
             .and_then(|m| cross_validate(&m, s))
             .map_or(f64::INFINITY, |c| c.mse)
     };
@@ -735,8 +794,7 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
             return grid
                 .into_iter()
                 .map(|x| (x, score(x)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(x, _)| x);
+                .min_by(|a, b| a.1.total_cmp(&b.1));
         }
         EffectKind::TorqueRipple => {
             // The harmonics of the rotor angle the current model's residual correlates with most
@@ -758,15 +816,16 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals) -> Option<f64> {
                 .take(3)
                 .map(|&(k, _)| (k, score(k)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))?;
-            return Some(best.0);
+            return Some(best);
         }
-        _ => return Some(0.0),
+        _ => return Some((0.0, f64::NAN)),
     };
     let scores: Vec<f64> = grid.iter().map(|&x| score(x)).collect();
     let k = (0..grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
     let lo = grid[k.saturating_sub(1)];
     let hi = grid[(k + 1).min(grid.len() - 1)];
-    Some(golden(lo, hi, score, 18))
+    let x = golden(lo, hi, score, 18);
+    Some((x, score(x)))
 }
 
 /// The physical parameter of an effect from a fit of the model that contains it (at position
@@ -1167,7 +1226,7 @@ fn try_candidate(
     measured: &[f64],
 ) -> Option<Tried> {
     let param = tune(model, kind, s)?;
-    let Some(trial) = model.with(Effect { kind, param }) else {
+    let Some(trial) = model.with(param) else {
         return Some(Tried::TooWide(kind));
     };
     let cv = cross_validate(&trial, s)?;
@@ -1186,7 +1245,7 @@ fn try_candidate(
     // and then even a 0.04 mN·m "braking" gained 3 % on held-out data).
     let braking_step = all
         .as_ref()
-        .filter(|_| kind == EffectKind::BrakingTorque && param != SLOPE_BRAKING)
+        .filter(|_| kind == EffectKind::BrakingTorque && param.param != SLOPE_BRAKING)
         .map(|f| {
             let sigma = (f.rss / f.n.max(1.0)).sqrt();
             (value * f.theta[0], sigma)
@@ -1525,10 +1584,7 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
     let mut unexplained = None;
     // After an ambiguity the structure is explained, twice over: not "unexplained".
     if ratio > 40.0 && ambiguity.is_none() {
-        let probe = model.with(Effect {
-            kind: EffectKind::PeriodicDisturbance,
-            param: f_peak,
-        });
+        let probe = model.with(Effect::new(EffectKind::PeriodicDisturbance, f_peak));
         if let Some((probe, cv)) = probe.and_then(|p| cross_validate(&p, s).map(|cv| (p, cv))) {
             let gain = 1.0 - cv.mse / current.mse;
             if gain >= MIN_GAIN && fold_wins(&cv, &current) >= MIN_FOLDS_BETTER {
