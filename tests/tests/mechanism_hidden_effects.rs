@@ -173,11 +173,9 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
     bad
 }
 
-fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
-    check_on(hidden, seed, &[Pattern::Sine, Pattern::Chirp])
-}
-
-fn check_on(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
+/// What is wrong with each of `hidden`, drawn in turn from the generator seeded `seed`, on each
+/// of `patterns`.
+fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
     let mut rng = StdRng::seed_from_u64(seed);
     say(format!("mechanism stand, rng seed {seed}:"));
     let mut failures = Vec::new();
@@ -240,57 +238,48 @@ fn check_on(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
     failures
 }
 
+/// The generator seeds of the asserted tests: four independent draws of each mechanism.
+const DRAWS: [u64; 4] = [20261123, 1, 2, 3];
+
+/// The mechanisms that are not lags and that diagnose gets right on every pattern.
+const NOT_LAGS: [Hidden; 9] = [
+    Hidden::Clean,
+    Hidden::ForceOffset,
+    Hidden::ClockRate,
+    Hidden::KtError,
+    Hidden::Stribeck,
+    Hidden::Viscous,
+    Hidden::ReynoldsDrag,
+    Hidden::DroppedMessages,
+    Hidden::TimestampJitter,
+];
+
+/// `hidden` on `patterns` over [`DRAWS`]; panics with every failure.
+fn assert_right(hidden: &[Hidden], patterns: &[Pattern]) {
+    let failures: Vec<String> = DRAWS
+        .iter()
+        .flat_map(|&seed| check(hidden, seed, patterns))
+        .collect();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
 /// The mechanisms diagnose gets right on the sine and on a chirp, on four independent draws each
 /// (magnitudes, rates and noise; the `sweep` below found them right on ten draws per mechanism).
 #[test]
 fn mechanisms_are_named_and_measured() {
-    let mut failures = Vec::new();
-    for seed in [20261123, 1, 2, 3] {
-        failures.extend(check(
-            &[
-                Hidden::Clean,
-                Hidden::CurrentLoopMeasured,
-                Hidden::ForceOffset,
-                Hidden::ClockRate,
-                Hidden::KtError,
-                Hidden::Stribeck,
-                Hidden::Viscous,
-                Hidden::ReynoldsDrag,
-                Hidden::DroppedMessages,
-                Hidden::TimestampJitter,
-            ],
-            seed,
-        ));
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let mut hidden = vec![Hidden::CurrentLoopMeasured];
+    hidden.extend(NOT_LAGS);
+    assert_right(&hidden, &[Pattern::Sine, Pattern::Chirp]);
 }
 
 /// On the staircase (lo, ¼, ½, ¾, hi, ¾, ½, ¼, each held 1 s) the mechanisms that are not lags,
-/// braking included, on the same four draws each. (Lags are not asserted on it: a step shows at
-/// the sample where it happened, and the first-order hold places it half a sample earlier, so a
-/// lag reads up to half a sample long — docs/SCIENCE.md.)
+/// braking included, on the same four draws each. (Lags are not asserted on it: a force sensor's
+/// lag is read from the force's slope, which a step breaks — docs/SCIENCE.md.)
 #[test]
 fn mechanisms_on_steps_are_named_and_measured() {
-    let mut failures = Vec::new();
-    for seed in [20261123, 1, 2, 3] {
-        failures.extend(check_on(
-            &[
-                Hidden::Clean,
-                Hidden::ForceOffset,
-                Hidden::Braking,
-                Hidden::ClockRate,
-                Hidden::KtError,
-                Hidden::Stribeck,
-                Hidden::Viscous,
-                Hidden::ReynoldsDrag,
-                Hidden::DroppedMessages,
-                Hidden::TimestampJitter,
-            ],
-            seed,
-            &[Pattern::Steps],
-        ));
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    let mut hidden = vec![Hidden::Braking];
+    hidden.extend(NOT_LAGS);
+    assert_right(&hidden, &[Pattern::Steps]);
 }
 
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
@@ -298,22 +287,18 @@ fn mechanisms_on_steps_are_named_and_measured() {
 #[test]
 #[ignore = "known failures, see docs/SCIENCE.md: braking at 100 Hz, an acceleration filter on the sine at 100 Hz, a long current-sense filter on the sine at 100 Hz, short current-loop lags on the sine, a fast velocity observer on the sine, a load cell held at 40-100 Hz, cogging on the sine"]
 fn mechanisms_diagnose_still_gets_wrong() {
-    let mut failures = Vec::new();
-    for seed in [20261123, 1, 2, 3] {
-        failures.extend(check(
-            &[
-                Hidden::CurrentSenseFilter,
-                Hidden::AccelerationFilter,
-                Hidden::Braking,
-                Hidden::CurrentLoopDemand,
-                Hidden::VelocityObserver,
-                Hidden::LoadCell,
-                Hidden::Cogging,
-            ],
-            seed,
-        ));
-    }
-    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert_right(
+        &[
+            Hidden::CurrentSenseFilter,
+            Hidden::AccelerationFilter,
+            Hidden::Braking,
+            Hidden::CurrentLoopDemand,
+            Hidden::VelocityObserver,
+            Hidden::LoadCell,
+            Hidden::Cogging,
+        ],
+        &[Pattern::Sine, Pattern::Chirp],
+    );
 }
 
 /// Every mechanism over several rng seeds (`PROPID_SWEEP=N`, default 4, from seed 1): how often
@@ -345,7 +330,7 @@ fn sweep() {
             .filter_map(|name| Hidden::ALL.into_iter().find(|h| h.name() == name))
             .collect();
         for seed in from..from + n {
-            check_on(&hidden, seed, patterns);
+            check(&hidden, seed, patterns);
         }
         return;
     }
@@ -366,7 +351,7 @@ fn sweep() {
         }
         let mut wrong = 0;
         for seed in from..from + n {
-            wrong += usize::from(!check_on(&[h], seed, patterns).is_empty());
+            wrong += usize::from(!check(&[h], seed, patterns).is_empty());
         }
         table.push(format!("{:<22} wrong on {wrong} of {n} seeds", h.name()));
     }

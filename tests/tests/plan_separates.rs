@@ -127,20 +127,6 @@ fn predicted_errors_hold_on_the_mechanism_level_stand() {
         None,
     )
     .unwrap();
-    // What the plan says its pattern cannot tell from a Coulomb friction (on its square wave, a
-    // braking torque acting while the rotor slows: regressor correlation 1.00); it must separate
-    // the torque lag, which the sine cannot.
-    let inseparable: Vec<String> = plan
-        .separations
-        .iter()
-        .filter(|s| !s.separable && s.effects.0 == "coulomb_friction")
-        .map(|s| s.effects.1.clone())
-        .collect();
-    assert!(
-        !inseparable.iter().any(|e| e == "torque_lag"),
-        "{:?}",
-        plan.separations
-    );
     let planned = Excitation {
         duration: 20.0,
         ..plan.excitation
