@@ -224,7 +224,10 @@ const SLOPE_BRAKING: f64 = -1.0;
 /// (its noise would select the samples it is compared on). A switch falls between two samples,
 /// which the neighbours cannot place: both samples next to it get ½, an error of ±B/2 of zero
 /// mean. (Either neighbour alone, or their mean acceleration, moves every switch by a sample,
-/// which then looked like a 0.2–4 ms lag beside the braking.) With `on` = [`SLOPE_BRAKING`]:
+/// which then looked like a 0.2–4 ms lag beside the braking; each sample's own state was right
+/// on the mechanism stand, but on a square wave, where braking and a constant torque are nearly
+/// one column, the noise it selects made a 6.35 N·m braking against a −6.99 N·m offset.) With
+/// `on` = [`SLOPE_BRAKING`]:
 /// while the measured velocity's ±20 ms slope opposes it.
 fn braking_samples(s: &Signals, on: f64) -> Vec<f64> {
     if on == SLOPE_BRAKING {
