@@ -139,3 +139,74 @@ fn bad_mechanism_flags_exit_2_naming_the_flag() {
         assert!(!err.contains("OutOfRange"), "{err}");
     }
 }
+
+/// The loop a user follows: a viscous bearing friction on propid's chirp (lo 0.1, speeds
+/// 800–2450 rad/s) is ambiguous among the drag shapes; `diagnose` says so, exits 0, and names in
+/// its JSON the `propid drive` run that would separate them; that run (steps down to lo 0.02),
+/// simulated on the same stand, gets the friction named alone with its value.
+#[test]
+fn an_ambiguous_report_names_the_run_that_resolves_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let sim = |name: &str, extra: &[&str]| {
+        let tsv = dir.path().join(name);
+        let mut args = vec![
+            "sim",
+            "--stand",
+            "mechanism",
+            "--c1",
+            "2e-6",
+            "--duration",
+            "60",
+            "--rate",
+            "250",
+            "--seed",
+            "3",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["-o", tsv.to_str().unwrap()]);
+        let out = propid(&args, None);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        tsv
+    };
+    let diagnose = |tsv: &std::path::Path| -> serde_json::Value {
+        let out = propid(
+            &["diagnose", "--format", "json", tsv.to_str().unwrap()],
+            None,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let first = diagnose(&sim("chirp.tsv", &["--pattern", "chirp"]));
+    assert_eq!(first["verdict"]["kind"], "ambiguous", "{first:#}");
+    let a = &first["ambiguity"];
+    assert!(
+        a["between"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|n| n == "viscous_friction"),
+        "{a:#}"
+    );
+    let run = &a["separating_run"];
+    assert_eq!(run["pattern"], "steps", "{a:#}");
+    let (lo, hi) = (run["lo"].as_f64().unwrap(), run["hi"].as_f64().unwrap());
+    let (lo, hi) = (lo.to_string(), hi.to_string());
+    let second = diagnose(&sim(
+        "advised.tsv",
+        &["--pattern", "steps", "--lo", &lo, "--hi", &hi],
+    ));
+    assert_eq!(second["verdict"]["kind"], "explained", "{second:#}");
+    let effects = second["effects"].as_array().unwrap();
+    assert_eq!(effects.len(), 1, "{second:#}");
+    assert_eq!(effects[0]["name"], "viscous_friction");
+    let value = effects[0]["value"].as_f64().unwrap();
+    assert!((value / 2e-6 - 1.0).abs() < 0.05, "{value}");
+}
