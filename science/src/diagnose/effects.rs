@@ -1270,7 +1270,12 @@ fn try_candidate(
     } else {
         let rms = sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured));
         sim_gain = 1.0 - rms / current_sim;
-        if sim_gain < -MAX_SIM_LOSS {
+        // A torque periodic in rotor angle turns faster than the samples resolve (6–12 periods a
+        // turn at 1500 rad/s: 36–72 rad of ripple phase per sample at 250 Hz); the simulation
+        // sees its mean over each step, about nothing, so the simulated velocity cannot judge it
+        // (a 2.3 mN·m cogging gained 93 % on held-out acceleration, 5 of 5 folds, and its
+        // simulation moved by −1.7 %, J and c2 refitted): the acceleration evidence decides.
+        if sim_gain < -MAX_SIM_LOSS && kind != EffectKind::TorqueRipple {
             note = format!(
                 "the held-out simulated velocity gets worse ({:+.1} %)",
                 sim_gain * 100.0
