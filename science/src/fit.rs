@@ -25,7 +25,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, ALL_SLOTS};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -400,13 +400,17 @@ fn fit_bytes(
                 start = (b.offset, line, 0);
             } else {
                 let mut est = LoadEstimator::new();
-                let mut i = 0u64;
-                walk(data, b.offset, b.rows, &layout, |_, v| {
-                    if i >= skip {
+                walk(
+                    data,
+                    b.offset,
+                    skip,
+                    b.rows - skip,
+                    &layout,
+                    scan::FIT_SLOTS,
+                    |_, v| {
                         est.update(v[2], v[3], v[4]);
-                    }
-                    i += 1;
-                });
+                    },
+                );
                 total = Some(est);
                 start = (b.offset, line, skip);
             }
@@ -415,20 +419,16 @@ fn fit_bytes(
     let estimator = total.unwrap_or_default();
     let n = last - first + 1;
     // Rows of the window, in order, with their line numbers.
-    let window_rows = |f: &mut dyn FnMut(u64, &[f64; 6])| {
+    let window_rows = |convert: u8, f: &mut dyn FnMut(u64, &[f64; 6])| {
         let (offset, line, skip) = start;
-        let mut i = 0u64;
-        walk(data, offset, skip + n, &layout, |l, v| {
-            if i >= skip {
-                f(line + l - 1, v);
-            }
-            i += 1;
+        walk(data, offset, skip, n, &layout, convert, |l, v| {
+            f(line + l - 1, v)
         });
     };
     if !sums_finite(&estimator) {
         let mut est = LoadEstimator::new();
         let mut overflow = None;
-        window_rows(&mut |line, v| {
+        window_rows(scan::FIT_SLOTS, &mut |line, v| {
             est.update(v[2], v[3], v[4]);
             if overflow.is_none() && !sums_finite(&est) {
                 overflow = Some((line, row_of(v).sample));
@@ -443,7 +443,7 @@ fn fit_bytes(
     if want_samples {
         let keep_every = (n / 4000).max(1);
         let mut i = 0u64;
-        window_rows(&mut |_, v| {
+        window_rows(ALL_SLOTS, &mut |_, v| {
             if i % keep_every == 0 {
                 kept.push(row_of(v).sample);
             }
@@ -453,15 +453,28 @@ fn fit_bytes(
     Ok((report, kept))
 }
 
-/// Calls `f(local line, values)` for the next `rows` rows from `offset` (blank lines skipped;
-/// the rows were parsed once already, so none fails).
-fn walk(data: &[u8], offset: usize, rows: u64, layout: &Layout, mut f: impl FnMut(u64, &[f64; 6])) {
-    let mut left = rows;
+/// Calls `f(local line, values)` for `rows` rows after the first `skip` rows from `offset`
+/// (blank lines skipped; the rows were parsed once already, so none fails; the skipped ones are
+/// not parsed again), converting the slots in `convert` ([`Layout::parse_line_converting`]).
+fn walk(
+    data: &[u8],
+    offset: usize,
+    skip: u64,
+    rows: u64,
+    layout: &Layout,
+    convert: u8,
+    mut f: impl FnMut(u64, &[f64; 6]),
+) {
+    let (mut skip, mut left) = (skip, rows);
     if left == 0 {
         return;
     }
     scan::lines(data, offset, data.len(), |line, bytes, _| {
-        if let Ok(Some(v)) = layout.parse_line(bytes) {
+        if skip > 0 {
+            skip -= u64::from(Layout::is_row(bytes));
+            return true;
+        }
+        if let Ok(Some(v)) = layout.parse_line_converting(bytes, convert) {
             f(line, &v);
             left -= 1;
         }
