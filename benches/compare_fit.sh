@@ -14,7 +14,7 @@
 #
 # usage: benches/compare_fit.sh [RUNS] [SEED_RUNS_LARGE]
 #   RUNS             runs of propid (and of the seed on the small file), default 5
-#   SEED_RUNS_LARGE  runs of the seed on the 3 M-row file (minutes each), default 1
+#   SEED_RUNS_LARGE  runs of the seed on the 3 M-row file (minutes each), default 1; 0: not run
 #   SMALL_RUNS=n     runs of propid on the 24,000-row file, default 50
 #   BEFORE=path      also time another propid binary (e.g. an older build) on the same files
 #   ONLY_SMALL=1     only the 24,000-row file (no 3 M-row file, no throughput run)
@@ -88,7 +88,8 @@ for f in "${files[@]}"; do
   n_seed=$runs n_propid=$runs
   [ $f = large ] && n_seed=$seed_runs_large
   [ $f = small ] && n_propid=$small_runs
-  progs=(propid seed); [ -n "${BEFORE:-}" ] && progs=(propid before seed)
+  progs=(propid); [ -n "${BEFORE:-}" ] && progs+=(before)
+  [ "$n_seed" -gt 0 ] && progs+=(seed)
   for prog in "${progs[@]}"; do
     case $prog in
       propid) n=$n_propid; r=$(time_runs "$n" "$P" fit "$dir/$f.tsv") ;;
@@ -99,7 +100,7 @@ for f in "${files[@]}"; do
     wall[$f.$prog]=$w cpu[$f.$prog]=$c
     printf '%-6s %10d %-14s %5d %12.6f %12.6f %10d\n' "$f" "$rows" "$prog" "$n" "$w" "$c" "$m"
   done
-  printf '%-6s seed / propid: %.1f× wall, %.1f× CPU' "$f" \
+  [ "$n_seed" -gt 0 ] && printf '%-6s seed / propid: %.1f× wall, %.1f× CPU' "$f" \
     "$(echo "${wall[$f.seed]} / ${wall[$f.propid]}" | bc -l)" \
     "$(echo "${cpu[$f.seed]} / ${cpu[$f.propid]}" | bc -l)"
   [ -n "${BEFORE:-}" ] && printf '   before / propid: %.2f× wall' "$(echo "${wall[$f.before]} / ${wall[$f.propid]}" | bc -l)"

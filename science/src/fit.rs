@@ -20,7 +20,8 @@ mod scan;
 use std::fs::File;
 use std::io::BufRead;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::OnceLock;
 
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
@@ -305,27 +306,33 @@ fn fit_bytes(
     let size = data.len() as u64;
     let pieces = scan::split(data, header_len, chunks);
     let done = AtomicU64::new(header_len as u64);
-    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = match pieces.split_first() {
-        None => Vec::new(),
-        Some((&(a, b), rest)) => std::thread::scope(|s| {
-            let handles: Vec<_> = rest
-                .iter()
-                .map(|&(a, b)| {
-                    let (layout, done) = (&layout, &done);
-                    s.spawn(move || scan::scan(data, a, b, layout, map, done, || {}))
-                })
-                .collect();
-            // This thread scans the first chunk and reports the progress of all.
-            let first = scan::scan(data, a, b, &layout, map, &done, || {
-                progress(done.load(Ordering::Relaxed), size)
-            });
-            let mut out = vec![first];
-            for h in handles {
-                out.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
-            }
-            out
-        }),
+    // Each thread takes the next piece not yet taken: a thread that starts late (its core
+    // busy) leaves its piece to the others instead of being waited for. The pieces, and so the
+    // sums, do not depend on which thread scans them.
+    let next = AtomicUsize::new(0);
+    let scanned: Vec<OnceLock<Result<scan::Chunk, (u64, RowError)>>> =
+        pieces.iter().map(|_| OnceLock::new()).collect();
+    let work = |tick: &mut dyn FnMut()| loop {
+        let k = next.fetch_add(1, Ordering::Relaxed);
+        let Some(&(a, b)) = pieces.get(k) else {
+            break;
+        };
+        let _ = scanned[k].set(scan::scan(data, a, b, &layout, map, &done, &mut *tick));
     };
+    std::thread::scope(|s| {
+        for _ in 1..pieces.len() {
+            s.spawn(|| work(&mut || {}));
+        }
+        // This thread reports the progress of all.
+        work(&mut || progress(done.load(Ordering::Relaxed), size));
+    });
+    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = scanned
+        .into_iter()
+        .map(|c| {
+            c.into_inner()
+                .expect("every piece is scanned before the scope ends")
+        })
+        .collect();
     progress(size, size);
     // Chunk k's lines start after line_base[k]; its rows after row_base[k].
     let mut chunks = Vec::with_capacity(results.len());
