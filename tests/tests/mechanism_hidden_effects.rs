@@ -103,13 +103,23 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
                 // force offset: both are one constant torque, on any pattern.
                 let constant =
                     a.between.contains(&"coulomb_friction") && a.between.contains(&"force_offset");
+                // On the seed's sine a lag and a constant torque are spanned by the same
+                // harmonics (docs/SCIENCE.md): any ambiguity with the right one among the two.
                 let allowed = match (e.ambiguous_with, p) {
+                    (_, Pattern::Sine) => true,
                     (Some((other, _)), _) => a.between.contains(&other),
                     _ if constant => true,
-                    (None, Pattern::Sine) => true,
                     (None, Pattern::Chirp) => false,
                 };
-                match a.between.iter().position(|n| *n == e.name) {
+                // The scenario's stated equivalent stands in for the effect (a positive offset
+                // is a Coulomb friction of the same size on a rotor that never reverses).
+                let stand_in = e.ambiguous_with.map(|(other, _)| other);
+                match a
+                    .between
+                    .iter()
+                    .position(|n| *n == e.name)
+                    .or_else(|| a.between.iter().position(|n| Some(*n) == stand_in))
+                {
                     Some(k) if allowed => Some(a.values[k]),
                     _ => {
                         bad.push(format!(
@@ -173,6 +183,23 @@ fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
                     format!("WRONG: {}", bad.join("; "))
                 }
             ));
+            if !bad.is_empty() && std::env::var_os("PROPID_SWEEP_VERBOSE").is_some() {
+                for c in &r.candidates {
+                    say(format!(
+                        "      {:<18} cv {:+7.2} % folds {} value {:.4e} sim {:+7.2} % {}{}",
+                        c.name,
+                        c.cv_gain_percent,
+                        c.folds_better,
+                        c.value,
+                        c.simulation_gain_percent,
+                        if c.selected { "SELECTED " } else { "" },
+                        c.note
+                    ));
+                }
+                for n in &r.notes {
+                    say(format!("      note: {n}"));
+                }
+            }
             failures.extend(
                 bad.into_iter()
                     .map(|b| format!("{} {p:?} {rate} Hz: {b}", h.name())),
@@ -182,43 +209,89 @@ fn check(hidden: &[Hidden], seed: u64) -> Vec<String> {
     failures
 }
 
-/// The mechanisms diagnose gets right on the sine and on a chirp.
+/// The mechanisms diagnose gets right on the sine and on a chirp, on four independent draws each
+/// (magnitudes, rates and noise; the `sweep` below found them right on ten draws per mechanism).
 #[test]
 fn mechanisms_are_named_and_measured() {
-    let failures = check(
-        &[
-            Hidden::Clean,
-            Hidden::CurrentLoopMeasured,
-            Hidden::ForceOffset,
-            Hidden::ClockRate,
-            Hidden::KtError,
-            Hidden::ReynoldsDrag,
-            Hidden::DroppedMessages,
-            Hidden::TimestampJitter,
-        ],
-        20261123,
-    );
+    let mut failures = Vec::new();
+    for seed in [20261123, 1, 2, 3] {
+        failures.extend(check(
+            &[
+                Hidden::Clean,
+                Hidden::CurrentLoopMeasured,
+                Hidden::ForceOffset,
+                Hidden::ClockRate,
+                Hidden::KtError,
+                Hidden::Stribeck,
+                Hidden::DroppedMessages,
+                Hidden::TimestampJitter,
+            ],
+            seed,
+        ));
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
 /// cannot find"); run with `-- --ignored` to see where each stands.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: filters and observers right on some draws and not on others, a current loop faster than a third of a sample interval, a load cell's second-order stage at 100 Hz, braking drags in a second effect, viscous vs drag exponent, cogging and Stribeck on the sine"]
+#[ignore = "known failures, see docs/SCIENCE.md: braking and acceleration filters wrong on some draws (a false braking on a filtered acceleration at 100 Hz, a 13 % short braking torque beside a drag exponent), a long current-sense filter on the sine at 100 Hz, a current loop faster than half a sample interval, a fast velocity observer on the sine, a load cell held at 40-100 Hz, viscous friction and a drag exponent ambiguous among the drag shapes on a chirp that never reaches low speed, cogging aliased at 250 Hz"]
 fn mechanisms_diagnose_still_gets_wrong() {
-    let failures = check(
-        &[
-            Hidden::CurrentSenseFilter,
-            Hidden::AccelerationFilter,
-            Hidden::CurrentLoopDemand,
-            Hidden::VelocityObserver,
-            Hidden::LoadCell,
-            Hidden::Braking,
-            Hidden::Viscous,
-            Hidden::Cogging,
-            Hidden::Stribeck,
-        ],
-        20261123,
-    );
+    let mut failures = Vec::new();
+    for seed in [20261123, 1, 2, 3] {
+        failures.extend(check(
+            &[
+                Hidden::CurrentSenseFilter,
+                Hidden::AccelerationFilter,
+                Hidden::Braking,
+                Hidden::CurrentLoopDemand,
+                Hidden::VelocityObserver,
+                Hidden::LoadCell,
+                Hidden::Viscous,
+                Hidden::ReynoldsDrag,
+                Hidden::Cogging,
+            ],
+            seed,
+        ));
+    }
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Every mechanism over several rng seeds (`PROPID_SWEEP=N`, default 4, from seed 1): how often
+/// each is right, for finding the draws a fixed seed does not reach. Never asserts; run with
+/// `-- --ignored --nocapture sweep`.
+#[test]
+#[ignore = "an exploration aid: prints a table, asserts nothing"]
+fn sweep() {
+    let n: u64 = std::env::var("PROPID_SWEEP")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(4);
+    let only = std::env::var("PROPID_SWEEP_ONLY").ok();
+    let mut table = Vec::new();
+    for h in Hidden::ALL {
+        // Effects outside the library are judged by another test (the report says "unexplained").
+        if matches!(
+            h,
+            Hidden::PeriodicDisturbance | Hidden::Gust | Hidden::VoltageLimit
+        ) {
+            continue;
+        }
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|x| x == h.name()))
+        {
+            continue;
+        }
+        let mut wrong = 0;
+        let from: u64 = std::env::var("PROPID_SWEEP_FROM")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(1);
+        for seed in from..from + n {
+            wrong += usize::from(!check(&[h], seed).is_empty());
+        }
+        table.push(format!("{:<22} wrong on {wrong} of {n} seeds", h.name()));
+    }
+    say(table.join("\n"));
 }

@@ -63,9 +63,11 @@ fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
             coulomb: 0.002,
             ..stand
         };
+        // On the sine the friction is at best one of two ambiguous candidates (beside a lag),
+        // never named alone.
         let on_sine = named(&simulate(coulomb, &sine, seed));
         assert!(
-            !on_sine.iter().any(|(n, _)| n == "coulomb_friction"),
+            on_sine != [("coulomb_friction".to_string(), on_sine[0].1)],
             "seed {seed}: the sine was expected to confuse friction with a lag: {on_sine:?}"
         );
         let on_plan = named(&simulate(coulomb, &planned, seed));

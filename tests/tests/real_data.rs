@@ -168,7 +168,7 @@ fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
         r.effects
     );
     assert!(
-        (r.simulation_rms.gain_percent - 37.5).abs() < 0.5,
+        (r.simulation_rms.gain_percent - 38.1).abs() < 0.5,
         "{:?}",
         r.simulation_rms
     );
@@ -201,7 +201,7 @@ fn esc32_f60_remaining_error_is_localized() {
         "lag {lag}"
     );
     assert!(
-        (r.simulation_rms.gain_percent - 8.5).abs() < 0.5,
+        (r.simulation_rms.gain_percent - 8.3).abs() < 0.5,
         "{:?}",
         r.simulation_rms
     );

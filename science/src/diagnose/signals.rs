@@ -161,6 +161,18 @@ impl Signals {
         instrument(&self.t, &self.acceleration, self.slope_half_width + 1, i)
     }
 
+    /// How fast the drive sees the rotor slowing at sample `i` [rad/s²], as a drive's braking
+    /// logic does: the mean of the neighbouring samples' reported accelerations, against the
+    /// velocity (positive: slowing). Sharp where a braking torque switches (it steps the
+    /// acceleration), unlike the ±20 ms velocity slope of `decelerating`; the sample's own
+    /// acceleration, the equation's left-hand side, is left out, so its noise does not choose
+    /// the samples it is compared on.
+    pub fn slowing(&self, i: usize) -> f64 {
+        let n = self.len();
+        let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+        -0.5 * (self.acceleration[a] + self.acceleration[b]) * self.velocity[i].signum()
+    }
+
     /// Number of samples.
     pub fn len(&self) -> usize {
         self.t.len()
