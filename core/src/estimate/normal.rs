@@ -174,10 +174,22 @@ impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
             weight: T::from_usize(BLOCK).unwrap_or(T::zero()),
             decay: T::one(),
         };
+        if !self.weighted && lambda == T::one() && N > 3 {
+            // Many entries: one pairwise dot product after the other keeps fewer values live.
+            for i in 0..N {
+                for j in i..N {
+                    out.phi_phi[i][j] = pairwise_dot(&self.phi[i], &self.phi[j]);
+                }
+                out.phi_y[i] = pairwise_dot(&self.phi[i], &self.y);
+            }
+            out.y_y = pairwise_dot(&self.y, &self.y);
+            return out;
+        }
         if !self.weighted && lambda == T::one() {
             // Every product of the block at once, position by position (each column is read
             // once for all its entries), in the same pairwise order as `pairwise_dot`: the
             // first three halvings for positions k, k+4, …, k+28 ([`tree8`]), then the last two.
+            // (Up to three regressors: with more, the partial sums no longer fit in registers.)
             let mut pp = [[[T::zero(); 4]; N]; N];
             let mut py = [[T::zero(); 4]; N];
             let mut yy = [T::zero(); 4];
