@@ -45,8 +45,6 @@ fi
 
 . benches/common.sh
 export LC_ALL=C
-# Microseconds since the epoch, from bash's clock variable.
-now_us() { local t=${EPOCHREALTIME/./}; echo "${t#0}"; }
 # Children's user + sys CPU time [s] in the output of bash's `times` (which must run in the shell
 # that waited for them, not in a command substitution).
 children_cpu() { awk 'NR == 2 { split($0, f, /[ms]+ */); print f[1] * 60 + f[2] + f[3] * 60 + f[4] }' "$1"; }
@@ -61,10 +59,12 @@ time_runs() {
   local cpu0 cpu1 t0 t1
   times > "$dir/times0"
   for _ in $(seq "$n"); do
-    t0=$(now_us)
+    # The clock is read in this shell (a command substitution would fork a subshell inside
+    # the timed interval): microseconds, with the decimal point taken out.
+    t0=${EPOCHREALTIME/./}
     "$@" >/dev/null 2>&1
-    t1=$(now_us)
-    echo $((t1 - t0)) >> "$log"
+    t1=${EPOCHREALTIME/./}
+    echo $((10#$t1 - 10#$t0)) >> "$log"
   done
   times > "$dir/times1"
   cpu0=$(children_cpu "$dir/times0")
