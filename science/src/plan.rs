@@ -196,10 +196,11 @@ pub struct Plan {
 
 /// The effect pairs that diagnose confuses on poor excitation, with the regressor each adds to
 /// the acceleration equation.
-fn effect_pairs() -> [(&'static str, &'static str); 3] {
+fn effect_pairs() -> [(&'static str, &'static str); 4] {
     [
         ("coulomb_friction", "torque_lag"),
         ("coulomb_friction", "viscous_friction"),
+        ("coulomb_friction", "braking_torque"),
         ("torque_lag", "acceleration_lag"),
     ]
 }
@@ -249,6 +250,13 @@ fn separations(f: &[f64], w: &[f64], dt: f64) -> Vec<Separation> {
         match name {
             "coulomb_friction" => w.iter().map(|v| v.signum()).collect(),
             "viscous_friction" => w.to_vec(),
+            // A braking torque: −B·sgn ω while the rotor slows. On a pattern that slows half the
+            // time and never rests, it is half a Coulomb friction plus a term in sgn(a).
+            "braking_torque" => w
+                .iter()
+                .zip(&acc)
+                .map(|(v, a)| if a * v < 0.0 { v.signum() } else { 0.0 })
+                .collect(),
             // A first-order torque lag L: felt = F − L·Ḟ.
             "torque_lag" => df.clone(),
             // An acceleration lag L: true = a + L·ȧ.

@@ -24,10 +24,14 @@ fn named(samples: &[propid_io::tsv::Sample]) -> Vec<(String, f64)> {
 }
 
 /// Coulomb friction named with its magnitude: alone, or beside a constant torque offset, which it
-/// equals when the speed never reverses (no pattern within lo..hi > 0 can tell them apart).
-fn coulomb_of(found: &[(String, f64)]) -> Option<f64> {
+/// equals when the speed never reverses (no pattern within lo..hi > 0 can tell them apart), or
+/// beside one of `inseparable`, the effects the plan itself says its pattern cannot tell from it.
+fn coulomb_of(found: &[(String, f64)], inseparable: &[String]) -> Option<f64> {
     let alone = found.len() == 1;
-    let with_offset = found.len() == 2 && found.iter().any(|(n, _)| n == "force_offset");
+    let with_offset = found.len() == 2
+        && found
+            .iter()
+            .any(|(n, _)| n == "force_offset" || inseparable.contains(n));
     found
         .iter()
         .find(|(n, _)| n == "coulomb_friction")
@@ -49,6 +53,20 @@ fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
         None,
     )
     .unwrap();
+    // What the plan says its pattern cannot tell from a Coulomb friction (on its square wave, a
+    // braking torque acting while the rotor slows: regressor correlation 1.00); it must separate
+    // the torque lag, which the sine cannot.
+    let inseparable: Vec<String> = plan
+        .separations
+        .iter()
+        .filter(|s| !s.separable && s.effects.0 == "coulomb_friction")
+        .map(|s| s.effects.1.clone())
+        .collect();
+    assert!(
+        !inseparable.iter().any(|e| e == "torque_lag"),
+        "{:?}",
+        plan.separations
+    );
     let planned = Excitation {
         duration: 60.0,
         ..plan.excitation
@@ -71,7 +89,8 @@ fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
             "seed {seed}: the sine was expected to confuse friction with a lag: {on_sine:?}"
         );
         let on_plan = named(&simulate(coulomb, &planned, seed));
-        let value = coulomb_of(&on_plan).unwrap_or_else(|| panic!("seed {seed}: {on_plan:?}"));
+        let value = coulomb_of(&on_plan, &inseparable)
+            .unwrap_or_else(|| panic!("seed {seed}: {on_plan:?}"));
         assert!((value / 0.002 - 1.0).abs() < 0.1, "{on_plan:?}");
 
         let lag = StandConfig {
@@ -108,6 +127,20 @@ fn predicted_errors_hold_on_the_mechanism_level_stand() {
         None,
     )
     .unwrap();
+    // What the plan says its pattern cannot tell from a Coulomb friction (on its square wave, a
+    // braking torque acting while the rotor slows: regressor correlation 1.00); it must separate
+    // the torque lag, which the sine cannot.
+    let inseparable: Vec<String> = plan
+        .separations
+        .iter()
+        .filter(|s| !s.separable && s.effects.0 == "coulomb_friction")
+        .map(|s| s.effects.1.clone())
+        .collect();
+    assert!(
+        !inseparable.iter().any(|e| e == "torque_lag"),
+        "{:?}",
+        plan.separations
+    );
     let planned = Excitation {
         duration: 20.0,
         ..plan.excitation

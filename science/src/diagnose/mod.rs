@@ -217,8 +217,37 @@ pub struct Ambiguity {
     pub units: [&'static str; 2],
     /// Held-out acceleration gains [%].
     pub cv_gain_percent: [f64; 2],
-    /// The `propid drive` pattern that would separate them.
-    pub separate_with: &'static str,
+    /// The `propid drive` run that would separate them, and why, in words.
+    pub separate_with: String,
+    /// The same run as data (for a program that acts on the advice).
+    pub separating_run: SeparatingRun,
+}
+
+/// A `propid drive` run that tells two ambiguous candidates apart.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SeparatingRun {
+    /// `--pattern`: `chirp` or `steps`.
+    pub pattern: &'static str,
+    /// `--lo`, when the run needs its own (a negative one reverses the rotor).
+    pub lo: Option<f64>,
+    /// `--hi`, when the run needs its own.
+    pub hi: Option<f64>,
+    /// What the run shows that these data do not.
+    pub why: &'static str,
+}
+
+impl SeparatingRun {
+    /// The `propid drive` flags.
+    pub fn flags(&self) -> String {
+        let mut s = format!("--pattern {}", self.pattern);
+        if let Some(lo) = self.lo {
+            s += &format!(" --lo {lo}");
+        }
+        if let Some(hi) = self.hi {
+            s += &format!(" --hi {hi}");
+        }
+        s
+    }
 }
 
 /// Correlations of the base model's acceleration residual with candidate explanatory signals.

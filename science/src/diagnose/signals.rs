@@ -32,6 +32,12 @@ pub struct Signals {
     pub decelerating: Vec<bool>,
     /// Median sample rate [Hz].
     pub rate: f64,
+    /// The reported acceleration's sample-to-sample noise σ [rad/s²]: from the median absolute
+    /// deviation of a[i] − (a[i−1] + a[i+1])/2 (σ·√1.5 for white noise; robust to the steps a
+    /// braking torque makes).
+    pub acceleration_noise: f64,
+    /// The same for the reported force [N·m].
+    pub force_noise: f64,
     /// First sample the regressions use: the first half second is a warm-up for the lag filters
     /// of the candidate models (their initial state is unknown), so every model is judged on the
     /// same samples.
@@ -132,6 +138,8 @@ impl Signals {
             .zip(&velocity)
             .map(|(d, w)| d * w.signum() < 0.0)
             .collect();
+        let acceleration_noise = noise_of(&acceleration);
+        let force_noise = noise_of(&force);
         let force_rate = local_slope(&t, &force, h);
         let jerk = local_slope(&t, &acceleration, h);
         Ok(Signals {
@@ -147,6 +155,8 @@ impl Signals {
             acceleration,
             position,
             rate,
+            acceleration_noise,
+            force_noise,
         })
     }
 
@@ -161,16 +171,31 @@ impl Signals {
         instrument(&self.t, &self.acceleration, self.slope_half_width + 1, i)
     }
 
-    /// How fast the drive sees the rotor slowing at sample `i` [rad/s²], as a drive's braking
-    /// logic does: the mean of the neighbouring samples' reported accelerations, against the
-    /// velocity (positive: slowing). Sharp where a braking torque switches (it steps the
-    /// acceleration), unlike the ±20 ms velocity slope of `decelerating`; the sample's own
-    /// acceleration, the equation's left-hand side, is left out, so its noise does not choose
-    /// the samples it is compared on.
+    /// How fast the rotor is slowing at sample `i` by its reported acceleration [rad/s²]
+    /// (positive: slowing).
     pub fn slowing(&self, i: usize) -> f64 {
+        -self.acceleration[i] * self.velocity[i].signum()
+    }
+
+    /// Whether the force steps between samples i − 1 and i: it changes by more than eight times
+    /// its noise and four times as much as over either neighbouring interval (a step of the
+    /// command, not a steep stretch of a smooth one).
+    pub fn force_steps_at(&self, i: usize) -> bool {
         let n = self.len();
-        let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
-        -0.5 * (self.acceleration[a] + self.acceleration[b]) * self.velocity[i].signum()
+        if i == 0 || i >= n {
+            return false;
+        }
+        let d = |k: usize| (self.force[k] - self.force[k - 1]).abs();
+        let here = d(i);
+        let before = if i >= 2 { d(i - 1) } else { 0.0 };
+        let after = if i + 1 < n { d(i + 1) } else { 0.0 };
+        here > 8.0 * self.force_noise && here > 4.0 * before.max(after)
+    }
+
+    /// Whether the force has steps at all (one in a thousand intervals at least).
+    pub fn has_force_steps(&self) -> bool {
+        let n = self.len();
+        (1..n).filter(|&i| self.force_steps_at(i)).count() * 1000 >= n
     }
 
     /// Number of samples.
@@ -182,7 +207,10 @@ impl Signals {
     /// with a first-order hold (the torque taken as linear between samples, exact for a
     /// continuous torque; a zero-order hold would apply each sample over the interval before it
     /// and make every fitted lag half a sample long).
-    pub fn lagged_force(&self, lag: f64) -> Vec<f64> {
+    ///
+    /// With `steps_at_samples`, a step of the force (see [`Signals::force_steps_at`]) is taken to
+    /// happen at the sample that first shows it: the old value holds over the interval before.
+    pub fn lagged_force(&self, lag: f64, steps_at_samples: bool) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.len());
         if lag <= 0.0 {
             out.extend_from_slice(&self.force);
@@ -193,7 +221,9 @@ impl Signals {
         for i in 1..self.len() {
             let dt = self.t[i] - self.t[i - 1];
             let (x0, x1) = (self.force[i - 1], self.force[i]);
-            if dt > 0.0 {
+            if dt > 0.0 && steps_at_samples && self.force_steps_at(i) {
+                y = x0 + (-dt / lag).exp() * (y - x0);
+            } else if dt > 0.0 {
                 // y' = (x − y)/L with x linear from x0 to x1 over dt, solved exactly.
                 let e = (-dt / lag).exp();
                 let slope = (x1 - x0) / dt;
@@ -203,6 +233,20 @@ impl Signals {
         }
         out
     }
+}
+
+/// A signal's sample-to-sample noise σ: from the median absolute deviation of
+/// x[i] − (x[i−1] + x[i+1])/2 (σ·√1.5 for white noise; robust to steps).
+fn noise_of(x: &[f64]) -> f64 {
+    let mut d: Vec<f64> = x
+        .windows(3)
+        .map(|w| (w[1] - 0.5 * (w[0] + w[2])).abs())
+        .collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    let mid = d.len() / 2;
+    1.4826 * *d.select_nth_unstable_by(mid, f64::total_cmp).1 / 1.5f64.sqrt()
 }
 
 /// Pearson correlation (0 if either side is constant).
