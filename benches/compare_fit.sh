@@ -5,10 +5,19 @@
 # and its peak RSS. CPU time (user + sys) is printed beside the wall time: on a shared machine
 # the wall time includes waiting for a core.
 #
+# Each run is timed alone with bash's $EPOCHREALTIME (microseconds; no process is started to read
+# the clock, so only the fork, exec and wait of the program itself are added, as for the seed), and
+# the median of the runs is reported; the CPU time is the children's user + sys time from bash's
+# `times` over all the runs, divided by their number. propid on the 24,000-row file takes a few
+# milliseconds, so it is run SMALL_RUNS times (default 50): the ratio there has the resolution of
+# a microsecond, not of bash's `time` (1 ms).
+#
 # usage: benches/compare_fit.sh [RUNS] [SEED_RUNS_LARGE]
 #   RUNS             runs of propid (and of the seed on the small file), default 5
-#   SEED_RUNS_LARGE  runs of the seed on the 3 M-row file (minutes each), default 1
+#   SEED_RUNS_LARGE  runs of the seed on the 3 M-row file (minutes each), default 1; 0: not run
+#   SMALL_RUNS=n     runs of propid on the 24,000-row file, default 50
 #   BEFORE=path      also time another propid binary (e.g. an older build) on the same files
+#   ONLY_SMALL=1     only the 24,000-row file (no 3 M-row file, no throughput run)
 #   SMOKE=1          tiny files, one run: checks that the script works (CI)
 # Needs python3 with numpy, scipy, pandas, GNU time (/usr/bin/time) and bc.
 set -euo pipefail
@@ -25,6 +34,7 @@ else
   small=24000; large=3000000; mib=128
 fi
 $P sim --rate 500 --duration $((small / 500)) --seed 1 -o "$dir/small.tsv" 2>/dev/null
+[ "${ONLY_SMALL:-0}" = 1 ] && large=$small
 $P sim --rate 500 --duration $((large / 500)) --seed 2 -o "$dir/large.tsv" 2>/dev/null
 # The throughput file: the large file's first $mib MiB, cut at a line end.
 head -c $((mib << 20)) "$dir/large.tsv" | head -n -1 > "$dir/mib.tsv"
@@ -34,46 +44,69 @@ if [ "$(stat -c %s "$dir/mib.tsv")" -lt $(((mib << 20) * 9 / 10)) ]; then
 fi
 
 . benches/common.sh
-# time_runs N command... → "median-wall median-cpu peak-RSS-KiB": wall and CPU (user + sys) from
-# bash's `time` (ms resolution) over N runs, the RSS from one more run under GNU time (not for
-# the seed, run through sh: its minutes on the large file are not repeated for that).
+export LC_ALL=C
+# Children's user + sys CPU time [s] in the output of bash's `times` (which must run in the shell
+# that waited for them, not in a command substitution).
+children_cpu() { awk 'NR == 2 { split($0, f, /[ms]+ */); print f[1] * 60 + f[2] + f[3] * 60 + f[4] }' "$1"; }
+# time_runs N command... → "median-wall mean-cpu peak-RSS-KiB": the wall time of each of N runs
+# (µs resolution), their median, the CPU time per run over all N, and the RSS from one more run
+# under GNU time (not for the seed, run through sh: its minutes on the large file are not
+# repeated for that).
 time_runs() {
   local n=$1; shift
   local log=$dir/time.log
   : > "$log"
-  local TIMEFORMAT='%3R %3U %3S'
+  local cpu0 cpu1 t0 t1
+  times > "$dir/times0"
   for _ in $(seq "$n"); do
-    { time "$@" >/dev/null 2>&1; } 2>> "$log"
+    # The clock is read in this shell (a command substitution would fork a subshell inside
+    # the timed interval): microseconds, with the decimal point taken out.
+    t0=${EPOCHREALTIME/./}
+    "$@" >/dev/null 2>&1
+    t1=${EPOCHREALTIME/./}
+    echo $((10#$t1 - 10#$t0)) >> "$log"
   done
+  times > "$dir/times1"
+  cpu0=$(children_cpu "$dir/times0")
+  cpu1=$(children_cpu "$dir/times1")
   local wall cpu rss
-  wall=$(awk '{print $1}' "$log" | median)
-  cpu=$(awk '{print $2 + $3}' "$log" | median)
+  wall=$(median < "$log" | awk '{ printf "%.6f", $1 / 1e6 }')
+  cpu=$(awk -v a="$cpu0" -v b="$cpu1" -v n="$n" 'BEGIN { printf "%.6f", (b - a) / n }')
   rss=0
   [ "$1" != sh ] && rss=$(/usr/bin/time -f "%M" "$@" 2>&1 >/dev/null | tail -1)
   echo "$wall $cpu $rss"
 }
 
 echo "machine: $(nproc) cores, $(uname -sm), load average $(cut -d' ' -f1-3 /proc/loadavg)"
-printf '%-6s %10s %-14s %12s %12s %10s\n' file rows program "wall [s]" "cpu [s]" "RSS [KiB]"
-declare -A wall
-for f in small large; do
+small_runs=${SMALL_RUNS:-50}
+[ "${SMOKE:-0}" = 1 ] && small_runs=3
+printf '%-6s %10s %-14s %5s %12s %12s %10s\n' file rows program runs "wall [s]" "cpu [s]" "RSS [KiB]"
+declare -A wall cpu
+files=(small large); [ "${ONLY_SMALL:-0}" = 1 ] && files=(small)
+for f in "${files[@]}"; do
   rows=$(($(wc -l < "$dir/$f.tsv") - 1))
-  n_seed=$runs; [ $f = large ] && n_seed=$seed_runs_large
-  progs=(propid seed); [ -n "${BEFORE:-}" ] && progs=(propid before seed)
+  n_seed=$runs n_propid=$runs
+  [ $f = large ] && n_seed=$seed_runs_large
+  [ $f = small ] && n_propid=$small_runs
+  progs=(propid); [ -n "${BEFORE:-}" ] && progs+=(before)
+  [ "$n_seed" -gt 0 ] && progs+=(seed)
   for prog in "${progs[@]}"; do
     case $prog in
-      propid) r=$(time_runs "$runs" "$P" fit "$dir/$f.tsv") ;;
-      before) r=$(time_runs "$runs" "$BEFORE" fit "$dir/$f.tsv") ;;
-      seed) r=$(time_runs "$n_seed" sh -c "exec python3 tests/seed/dynamics_id_regressor.py --no-plot < '$dir/$f.tsv'") ;;
+      propid) n=$n_propid; r=$(time_runs "$n" "$P" fit "$dir/$f.tsv") ;;
+      before) n=$n_propid; r=$(time_runs "$n" "$BEFORE" fit "$dir/$f.tsv") ;;
+      seed) n=$n_seed; r=$(time_runs "$n" sh -c "exec python3 tests/seed/dynamics_id_regressor.py --no-plot < '$dir/$f.tsv'") ;;
     esac
     read -r w c m <<< "$r"
-    wall[$f.$prog]=$w
-    printf '%-6s %10d %-14s %12.3f %12.3f %10d\n' "$f" "$rows" "$prog" "$w" "$c" "$m"
+    wall[$f.$prog]=$w cpu[$f.$prog]=$c
+    printf '%-6s %10d %-14s %5d %12.6f %12.6f %10d\n' "$f" "$rows" "$prog" "$n" "$w" "$c" "$m"
   done
-  printf '%-6s seed / propid (wall): %.0f×' "$f" "$(echo "${wall[$f.seed]} / ${wall[$f.propid]}" | bc -l)"
-  [ -n "${BEFORE:-}" ] && printf '   before / propid: %.1f×' "$(echo "${wall[$f.before]} / ${wall[$f.propid]}" | bc -l)"
+  [ "$n_seed" -gt 0 ] && printf '%-6s seed / propid: %.1f× wall, %.1f× CPU' "$f" \
+    "$(echo "${wall[$f.seed]} / ${wall[$f.propid]}" | bc -l)" \
+    "$(echo "${cpu[$f.seed]} / ${cpu[$f.propid]}" | bc -l)"
+  [ -n "${BEFORE:-}" ] && printf '   before / propid: %.2f× wall' "$(echo "${wall[$f.before]} / ${wall[$f.propid]}" | bc -l)"
   echo
 done
+[ "${ONLY_SMALL:-0}" = 1 ] && exit 0
 bytes=$(stat -c %s "$dir/mib.tsv")
 read -r w c m <<< "$(time_runs "$runs" "$P" fit "$dir/mib.tsv")"
 rate() { awk -v b="$1" -v t="$2" 'BEGIN { if (t > 0) printf "%.0f", b / t / 1e6; else printf "n/a" }'; }

@@ -206,6 +206,66 @@ fn parse_field_bytes(field: &[u8]) -> Option<f64> {
     }
 }
 
+/// Every slot of [`HEADER`], for [`Layout::parse_line_converting`].
+pub const ALL_SLOTS: u8 = 0b11_1111;
+
+/// The line without the `\r`s (and `\n`s) at its end.
+#[inline]
+fn strip_cr(line: &[u8]) -> &[u8] {
+    match line {
+        [.., b'\r'] => {
+            let mut l = line;
+            while let [rest @ .., b'\r' | b'\n'] = l {
+                l = rest;
+            }
+            l
+        }
+        _ => line,
+    }
+}
+
+/// The number of ASCII digits `b` starts with, eight bytes at a time.
+#[inline]
+fn leading_digits(b: &[u8]) -> usize {
+    const ONES: u64 = 0x0101_0101_0101_0101;
+    let mut n = 0;
+    while let Some(chunk) = b.get(n..).and_then(|r| r.first_chunk::<8>()) {
+        // Byte by byte, z = byte ^ '0' is below 10 exactly for a digit; (z & 0x7f) + 0x76 has
+        // its top bit set for z & 0x7f ≥ 10 (and cannot carry into the next byte), z itself
+        // for z ≥ 0x80. The lowest flagged byte is the first non-digit.
+        let z = u64::from_le_bytes(*chunk) ^ (0x30 * ONES);
+        let flags = (((z & (0x7f * ONES)) + 0x76 * ONES) | z) & (0x80 * ONES);
+        if flags != 0 {
+            return n + (flags.trailing_zeros() / 8) as usize;
+        }
+        n += 8;
+    }
+    while b.get(n).is_some_and(u8::is_ascii_digit) {
+        n += 1;
+    }
+    n
+}
+
+/// The length of the plain decimal number (`-?[0-9]+(.[0-9]+)?`, at most 300 bytes, so finite)
+/// that `field` starts with, if it ends at a tab or at the end of `field`.
+#[inline]
+fn plain_decimal(field: &[u8]) -> Option<usize> {
+    let sign = usize::from(field.first() == Some(&b'-'));
+    let int = leading_digits(&field[sign..]);
+    if int == 0 {
+        return None;
+    }
+    let mut end = sign + int;
+    if field.get(end) == Some(&b'.') {
+        let frac = leading_digits(&field[end + 1..]);
+        if frac == 0 {
+            return None;
+        }
+        end += 1 + frac;
+    }
+    (end <= 300 && matches!(field.get(end), None | Some(b'\t'))).then_some(end)
+}
+
 impl Layout {
     fn new(idx: [Option<usize>; 6]) -> Self {
         let last = idx.iter().flatten().copied().max().unwrap_or(0);
@@ -226,19 +286,33 @@ impl Layout {
         }
     }
 
+    /// True if the line (without its `\n`) is a row, false if [`Layout::parse_line`] skips it as
+    /// blank.
+    #[inline]
+    pub fn is_row(line: &[u8]) -> bool {
+        let line = strip_cr(line);
+        !(line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line))
+    }
+
     /// Parses one line (without its `\n`) into ts_local, t, force, velocity, acceleration,
     /// position (NaN where empty or absent); `None` for a blank line.
     pub fn parse_line(&self, line: &[u8]) -> Result<Option<[f64; 6]>, RowError> {
-        let line = match line {
-            [.., b'\r'] => {
-                let mut l = line;
-                while let [rest @ .., b'\r' | b'\n'] = l {
-                    l = rest;
-                }
-                l
-            }
-            _ => line,
-        };
+        self.parse_line_converting(line, ALL_SLOTS)
+    }
+
+    /// [`Layout::parse_line`], converting only the slots whose bit (`1 << slot`, slots in
+    /// [`HEADER`] order) is set in `convert`. The other fields are checked all the same (the
+    /// same text is the same error) and read as `0.0` when they are a plain decimal number
+    /// (`-?[0-9]+(.[0-9]+)?`, at most 300 bytes: always finite), without the cost of a float
+    /// conversion; any other text is converted as `parse_line` does. So in every slot
+    /// `is_finite()` is what `parse_line` gives, and the converted slots hold its exact values.
+    #[inline]
+    pub fn parse_line_converting(
+        &self,
+        line: &[u8],
+        convert: u8,
+    ) -> Result<Option<[f64; 6]>, RowError> {
+        let line = strip_cr(line);
         if line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line) {
             return Ok(None);
         }
@@ -249,7 +323,19 @@ impl Layout {
             found = field_index + 1;
             // The common case: a plain number right up to the tab (or the line's end), parsed
             // without looking for the tab first.
-            if slot != NONE {
+            if slot != NONE && convert & (1 << slot) == 0 {
+                // Checked, not converted: a plain decimal number ends at the tab or the line.
+                if let Some(used) = plain_decimal(rest) {
+                    values[slot as usize] = 0.0;
+                    match rest.get(used + 1..) {
+                        None => break,
+                        Some(next) => {
+                            rest = next;
+                            continue;
+                        }
+                    }
+                }
+            } else if slot != NONE {
                 if let Ok((v, used)) = fast_float2::parse_partial::<f64, _>(rest) {
                     match rest.get(used) {
                         None => {
@@ -593,7 +679,76 @@ mod tests {
                 (Some(_), Ok(None)) if c.trim().is_empty() => {}
                 (w, g) => panic!("`{c}` in a line: std {w:?}, reader {g:?}"),
             }
+            // Converting some slots only: the same rows, errors and finiteness everywhere, the
+            // same values in the converted slots.
+            let layout = r.layout().clone();
+            let cases_in_line = [
+                format!("{c}\t{c}\t{c}\t{c}\t{c}\t{c}"),
+                format!("1.5\t{c}\t-2\t{c}\t0.25\t{c}"),
+                format!("{c}\t1\t2\t3\t4\t{c}"),
+                format!("{c}\t1\t2\t3\t4"),
+                format!("{c}\t1\t2\t3\t4\t"),
+                format!("{c}\t1\t2"),
+            ];
+            for text in &cases_in_line {
+                let full = layout.parse_line(text.as_bytes());
+                for convert in [0u8, 0b1_1100, 0b10_0001, ALL_SLOTS] {
+                    let part = layout.parse_line_converting(text.as_bytes(), convert);
+                    match (&full, &part) {
+                        (Ok(Some(a)), Ok(Some(b))) => {
+                            for slot in 0..6 {
+                                assert_eq!(a[slot].is_finite(), b[slot].is_finite(), "`{text}`");
+                                if convert & (1 << slot) != 0 {
+                                    assert!(
+                                        a[slot].to_bits() == b[slot].to_bits()
+                                            || (a[slot].is_nan() && b[slot].is_nan()),
+                                        "`{text}`"
+                                    );
+                                }
+                            }
+                        }
+                        (a, b) => assert_eq!(a, b, "`{text}`"),
+                    }
+                    assert_eq!(
+                        Layout::is_row(text.as_bytes()),
+                        matches!(full, Ok(Some(_)) | Err(_)),
+                        "`{text}`"
+                    );
+                }
+            }
         }
+    }
+
+    /// The digit scan eight bytes at a time finds the first non-digit wherever it is.
+    #[test]
+    fn leading_digits_and_plain_decimals() {
+        for len in 0..40 {
+            for stop in [b'.', b'\t', b'/', b':', b' ', 0x80, 0xb0, 0xff, b'a'] {
+                let mut b = vec![b'7'; len];
+                b.push(stop);
+                b.extend_from_slice(b"123456789");
+                assert_eq!(leading_digits(&b), len, "{len} {stop}");
+                assert_eq!(leading_digits(&b[..len]), len);
+            }
+        }
+        assert_eq!(plain_decimal(b"12.5\tx"), Some(4));
+        assert_eq!(plain_decimal(b"-0.000000000000000001"), Some(21));
+        assert_eq!(plain_decimal(b"7"), Some(1));
+        for no in [
+            &b"1."[..],
+            b".5",
+            b"-",
+            b"1e5",
+            b"1.5 ",
+            b"+1",
+            b"nan",
+            b"1.2.3",
+            b"",
+        ] {
+            assert_eq!(plain_decimal(no), None, "{}", String::from_utf8_lossy(no));
+        }
+        assert_eq!(plain_decimal(&[b'9'; 300]), Some(300));
+        assert_eq!(plain_decimal(&[b'9'; 301]), None);
     }
 
     #[test]

@@ -20,12 +20,13 @@ mod scan;
 use std::fs::File;
 use std::io::BufRead;
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::OnceLock;
 
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, ALL_SLOTS};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -305,27 +306,33 @@ fn fit_bytes(
     let size = data.len() as u64;
     let pieces = scan::split(data, header_len, chunks);
     let done = AtomicU64::new(header_len as u64);
-    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = match pieces.split_first() {
-        None => Vec::new(),
-        Some((&(a, b), rest)) => std::thread::scope(|s| {
-            let handles: Vec<_> = rest
-                .iter()
-                .map(|&(a, b)| {
-                    let (layout, done) = (&layout, &done);
-                    s.spawn(move || scan::scan(data, a, b, layout, map, done, || {}))
-                })
-                .collect();
-            // This thread scans the first chunk and reports the progress of all.
-            let first = scan::scan(data, a, b, &layout, map, &done, || {
-                progress(done.load(Ordering::Relaxed), size)
-            });
-            let mut out = vec![first];
-            for h in handles {
-                out.push(h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)));
-            }
-            out
-        }),
+    // Each thread takes the next piece not yet taken: a thread that starts late (its core
+    // busy) leaves its piece to the others instead of being waited for. The pieces, and so the
+    // sums, do not depend on which thread scans them.
+    let next = AtomicUsize::new(0);
+    let scanned: Vec<OnceLock<Result<scan::Chunk, (u64, RowError)>>> =
+        pieces.iter().map(|_| OnceLock::new()).collect();
+    let work = |tick: &mut dyn FnMut()| loop {
+        let k = next.fetch_add(1, Ordering::Relaxed);
+        let Some(&(a, b)) = pieces.get(k) else {
+            break;
+        };
+        let _ = scanned[k].set(scan::scan(data, a, b, &layout, map, &done, &mut *tick));
     };
+    std::thread::scope(|s| {
+        for _ in 1..pieces.len() {
+            s.spawn(|| work(&mut || {}));
+        }
+        // This thread reports the progress of all.
+        work(&mut || progress(done.load(Ordering::Relaxed), size));
+    });
+    let results: Vec<Result<scan::Chunk, (u64, RowError)>> = scanned
+        .into_iter()
+        .map(|c| {
+            c.into_inner()
+                .expect("every piece is scanned before the scope ends")
+        })
+        .collect();
     progress(size, size);
     // Chunk k's lines start after line_base[k]; its rows after row_base[k].
     let mut chunks = Vec::with_capacity(results.len());
@@ -400,13 +407,17 @@ fn fit_bytes(
                 start = (b.offset, line, 0);
             } else {
                 let mut est = LoadEstimator::new();
-                let mut i = 0u64;
-                walk(data, b.offset, b.rows, &layout, |_, v| {
-                    if i >= skip {
+                walk(
+                    data,
+                    b.offset,
+                    skip,
+                    b.rows - skip,
+                    &layout,
+                    scan::FIT_SLOTS,
+                    |_, v| {
                         est.update(v[2], v[3], v[4]);
-                    }
-                    i += 1;
-                });
+                    },
+                );
                 total = Some(est);
                 start = (b.offset, line, skip);
             }
@@ -415,20 +426,16 @@ fn fit_bytes(
     let estimator = total.unwrap_or_default();
     let n = last - first + 1;
     // Rows of the window, in order, with their line numbers.
-    let window_rows = |f: &mut dyn FnMut(u64, &[f64; 6])| {
+    let window_rows = |convert: u8, f: &mut dyn FnMut(u64, &[f64; 6])| {
         let (offset, line, skip) = start;
-        let mut i = 0u64;
-        walk(data, offset, skip + n, &layout, |l, v| {
-            if i >= skip {
-                f(line + l - 1, v);
-            }
-            i += 1;
+        walk(data, offset, skip, n, &layout, convert, |l, v| {
+            f(line + l - 1, v)
         });
     };
     if !sums_finite(&estimator) {
         let mut est = LoadEstimator::new();
         let mut overflow = None;
-        window_rows(&mut |line, v| {
+        window_rows(scan::FIT_SLOTS, &mut |line, v| {
             est.update(v[2], v[3], v[4]);
             if overflow.is_none() && !sums_finite(&est) {
                 overflow = Some((line, row_of(v).sample));
@@ -443,7 +450,7 @@ fn fit_bytes(
     if want_samples {
         let keep_every = (n / 4000).max(1);
         let mut i = 0u64;
-        window_rows(&mut |_, v| {
+        window_rows(ALL_SLOTS, &mut |_, v| {
             if i % keep_every == 0 {
                 kept.push(row_of(v).sample);
             }
@@ -453,15 +460,28 @@ fn fit_bytes(
     Ok((report, kept))
 }
 
-/// Calls `f(local line, values)` for the next `rows` rows from `offset` (blank lines skipped;
-/// the rows were parsed once already, so none fails).
-fn walk(data: &[u8], offset: usize, rows: u64, layout: &Layout, mut f: impl FnMut(u64, &[f64; 6])) {
-    let mut left = rows;
+/// Calls `f(local line, values)` for `rows` rows after the first `skip` rows from `offset`
+/// (blank lines skipped; the rows were parsed once already, so none fails; the skipped ones are
+/// not parsed again), converting the slots in `convert` ([`Layout::parse_line_converting`]).
+fn walk(
+    data: &[u8],
+    offset: usize,
+    skip: u64,
+    rows: u64,
+    layout: &Layout,
+    convert: u8,
+    mut f: impl FnMut(u64, &[f64; 6]),
+) {
+    let (mut skip, mut left) = (skip, rows);
     if left == 0 {
         return;
     }
     scan::lines(data, offset, data.len(), |line, bytes, _| {
-        if let Ok(Some(v)) = layout.parse_line(bytes) {
+        if skip > 0 {
+            skip -= u64::from(Layout::is_row(bytes));
+            return true;
+        }
+        if let Ok(Some(v)) = layout.parse_line_converting(bytes, convert) {
             f(line, &v);
             left -= 1;
         }

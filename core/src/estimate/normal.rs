@@ -82,10 +82,12 @@ const BLOCK: usize = 32;
 struct Buffer<T, const N: usize> {
     phi: [[T; BLOCK]; N],
     y: [T; BLOCK],
+    /// The samples' weights, only when `weighted` (an unweighted update writes none).
     w: [T; BLOCK],
     /// Samples stored, 0..BLOCK.
     len: usize,
-    /// A weight other than 1 is among them.
+    /// A weight other than 1 is among them, and `w[..len]` holds every weight; otherwise each
+    /// weight is 1 and `w` is not read.
     weighted: bool,
 }
 
@@ -138,7 +140,7 @@ impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
         let mut s = [T::zero(); BLOCK];
         let mut f = T::one();
         for k in (0..len).rev() {
-            s[k] = self.w[k] * f;
+            s[k] = self.weight(k) * f;
             f *= lambda;
         }
         let mut out = match lanes(core::mem::size_of::<T>()) {
@@ -148,6 +150,16 @@ impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
         };
         out.decay = f;
         out
+    }
+
+    /// Sample k's weight.
+    #[inline(always)]
+    fn weight(&self, k: usize) -> T {
+        if self.weighted {
+            self.w[k]
+        } else {
+            T::one()
+        }
     }
 
     /// Sums a full block: each entry is a pairwise sum of its 32 products (elementwise array
@@ -162,7 +174,8 @@ impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
             weight: T::from_usize(BLOCK).unwrap_or(T::zero()),
             decay: T::one(),
         };
-        if !self.weighted && lambda == T::one() {
+        if !self.weighted && lambda == T::one() && N > 3 {
+            // Many entries: one pairwise dot product after the other keeps fewer values live.
             for i in 0..N {
                 for j in i..N {
                     out.phi_phi[i][j] = pairwise_dot(&self.phi[i], &self.phi[j]);
@@ -172,10 +185,37 @@ impl<T: RealField + Copy, const N: usize> Buffer<T, N> {
             out.y_y = pairwise_dot(&self.y, &self.y);
             return out;
         }
+        if !self.weighted && lambda == T::one() {
+            // Every product of the block at once, position by position (each column is read
+            // once for all its entries), in the same pairwise order as `pairwise_dot`: the
+            // first three halvings for positions k, k+4, …, k+28 ([`tree8`]), then the last two.
+            // (Up to three regressors: with more, the partial sums no longer fit in registers.)
+            let mut pp = [[[T::zero(); 4]; N]; N];
+            let mut py = [[T::zero(); 4]; N];
+            let mut yy = [T::zero(); 4];
+            for k in 0..4 {
+                for i in 0..N {
+                    for j in i..N {
+                        pp[i][j][k] = tree8(&self.phi[i], &self.phi[j], k);
+                    }
+                    py[i][k] = tree8(&self.phi[i], &self.y, k);
+                }
+                yy[k] = tree8(&self.y, &self.y, k);
+            }
+            let last = |v: [T; 4]| (v[0] + v[2]) + (v[1] + v[3]);
+            for i in 0..N {
+                for j in i..N {
+                    out.phi_phi[i][j] = last(pp[i][j]);
+                }
+                out.phi_y[i] = last(py[i]);
+            }
+            out.y_y = last(yy);
+            return out;
+        }
         let mut s = [T::zero(); BLOCK];
         let mut f = T::one();
         for k in (0..BLOCK).rev() {
-            s[k] = self.w[k] * f;
+            s[k] = self.weight(k) * f;
             f *= lambda;
         }
         out.decay = f;
@@ -338,6 +378,15 @@ impl<T: RealField + Copy, const N: usize, const L: usize> Lanes<T, N, L> {
     }
 }
 
+/// The partial sum of `pairwise_dot(a, b)` that ends up in its element k < 4 after the halvings
+/// by 16, 8 and 4: the products at k, k+4, …, k+28, added in that order.
+#[inline(always)]
+fn tree8<T: RealField + Copy>(a: &[T; BLOCK], b: &[T; BLOCK], k: usize) -> T {
+    let p = |m: usize| a[k + 4 * m] * b[k + 4 * m];
+    // Halving by 16 adds position +16 (m + 4), by 8 position +8 (m + 2), by 4 position +4.
+    ((p(0) + p(4)) + (p(2) + p(6))) + ((p(1) + p(5)) + (p(3) + p(7)))
+}
+
 /// Σₖ a[k]·b[k] over a full block, summed pairwise.
 #[inline(always)]
 fn pairwise_dot<T: RealField + Copy>(a: &[T; BLOCK], b: &[T; BLOCK]) -> T {
@@ -429,7 +478,10 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             b.phi[i][k] = phi[i];
         }
         b.y[k] = y;
-        b.w[k] = T::one();
+        // A weight is stored only in a block that has a weight other than one.
+        if b.weighted {
+            b.w[k] = T::one();
+        }
         b.len = k + 1;
         if b.len == BLOCK {
             self.flush();
@@ -445,8 +497,16 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
             b.phi[i][k] = phi[i];
         }
         b.y[k] = y;
-        b.w[k] = w;
-        b.weighted |= w != T::one();
+        if !b.weighted && w != T::one() {
+            // The first weight other than one in this block: the samples before it had one.
+            for wk in &mut b.w[..k] {
+                *wk = T::one();
+            }
+            b.weighted = true;
+        }
+        if b.weighted {
+            b.w[k] = w;
+        }
         b.len = k + 1;
         if b.len == BLOCK {
             self.flush();
@@ -901,6 +961,74 @@ mod tests {
         assert_eq!(a.matrix(), all.matrix());
         assert_eq!(a.vector(), all.vector());
         assert_eq!(a.count(), 50.0);
+    }
+
+    /// A full unweighted block is summed with every product at once, in exactly the pairwise
+    /// order of `pairwise_dot` (bit for bit), in f64 and f32.
+    #[test]
+    fn full_block_sums_are_the_pairwise_dots_bit_for_bit() {
+        fn check<T: RealField + Copy + core::fmt::Debug>(cast: impl Fn(f64) -> T) {
+            let mut s = 11u64;
+            for _ in 0..50 {
+                let mut b = Buffer::<T, 3>::empty();
+                for k in 0..BLOCK {
+                    for i in 0..3 {
+                        b.phi[i][k] = cast(lcg(&mut s) * 10f64.powi((k % 7) as i32 - 3));
+                    }
+                    b.y[k] = cast(lcg(&mut s));
+                }
+                let got = b.full_sums(T::one());
+                for i in 0..3 {
+                    for j in i..3 {
+                        assert_eq!(got.phi_phi[i][j], pairwise_dot(&b.phi[i], &b.phi[j]));
+                    }
+                    assert_eq!(got.phi_y[i], pairwise_dot(&b.phi[i], &b.y));
+                }
+                assert_eq!(got.y_y, pairwise_dot(&b.y, &b.y));
+            }
+        }
+        check::<f64>(|v| v);
+        check::<f32>(|v| v as f32);
+    }
+
+    /// Unweighted and weighted updates mixed inside blocks (the first weight other than one
+    /// arriving after unweighted samples, with forgetting) match a direct sum.
+    #[test]
+    fn unweighted_then_weighted_in_one_block_match_a_direct_sum() {
+        for lambda in [1.0, 0.97] {
+            let mut ne = NormalEquations::<f64, 2>::with_forgetting(lambda);
+            let mut direct = [[0.0; 2]; 2];
+            let mut weight = 0.0;
+            let mut s = 5u64;
+            for k in 0..150 {
+                let phi = [lcg(&mut s), lcg(&mut s)];
+                let w = if k % 32 == 20 || k % 45 == 3 {
+                    3.0
+                } else {
+                    1.0
+                };
+                if k % 3 == 0 {
+                    ne.update_weighted(&phi, 1.0, w);
+                } else if w == 1.0 {
+                    ne.update(&phi, 1.0);
+                } else {
+                    ne.update_weighted(&phi, 1.0, w);
+                }
+                weight = weight * lambda + w;
+                for (i, row) in direct.iter_mut().enumerate() {
+                    for (j, v) in row.iter_mut().enumerate() {
+                        *v = *v * lambda + w * phi[i] * phi[j];
+                    }
+                }
+                let m = ne.matrix();
+                for i in 0..2 {
+                    for j in 0..2 {
+                        assert!((m[i][j] - direct[i][j]).abs() < 1e-12, "{lambda} {k}");
+                    }
+                }
+                assert!((ne.count() - weight).abs() < 1e-12, "{lambda} {k}");
+            }
+        }
     }
 
     #[test]

@@ -17,6 +17,9 @@ use propid_io::tsv::{Layout, RowError};
 const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
 /// Blocks per run before neighbours are merged (the block size doubles).
 const MAX_BLOCKS: usize = if cfg!(test) { 8 } else { 1024 };
+/// The slots the fit converts: force, velocity, acceleration. The others (ts_local, t,
+/// position) are checked, and t's finiteness kept, without the cost of a float conversion.
+pub(super) const FIT_SLOTS: u8 = 0b1_1100;
 /// Pages behind the scan are dropped from the mapping every this many bytes (peak RSS).
 const RELEASE_BYTES: usize = 8 << 20;
 
@@ -133,7 +136,7 @@ pub(super) fn scan(
             released = offset;
             tick();
         }
-        let v = match layout.parse_line(bytes) {
+        let v = match layout.parse_line_converting(bytes, FIT_SLOTS) {
             Ok(Some(v)) => v,
             Ok(None) => return true,
             Err(e) => {
@@ -188,7 +191,8 @@ pub(super) fn scan(
         c.run_rows += 1;
         true
     });
-    release(map, released, end);
+    // The last pages scanned (under RELEASE_BYTES) stay mapped until the map is dropped: the
+    // block the seed's cut falls in may be read again, and dropping them costs a system call.
     done.fetch_add((end - released) as u64, Ordering::Relaxed);
     c.last_row_complete = in_run;
     match error {
