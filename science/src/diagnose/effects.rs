@@ -330,7 +330,19 @@ impl Model {
         row
     }
 
-    /// The regression row at sample `i` for velocity `omega`. With `dynamics_only`, terms that
+    /// The drag term |ω|^p·sgn ω of a simulated speed (once per speed: a simulation step
+    /// evaluates two samples' rows at each speed).
+    fn drag(p: &Prepared, omega: f64) -> f64 {
+        if p.exponent == 2.0 {
+            omega * omega.abs()
+        } else if omega == 0.0 {
+            0.0
+        } else {
+            omega.abs().powf(p.exponent) * omega.signum()
+        }
+    }
+
+    /// The regression row at sample `i` at `speed`. With `dynamics_only`, terms that
     /// describe the sensor rather than the load (acceleration lag) are zero.
     /// With `step` > 0 (simulation), a torque periodic in angle is averaged over the angle the
     /// rotor turns in one step: a ripple far above the sample rate moves the load as its mean
@@ -340,11 +352,25 @@ impl Model {
         p: &Prepared,
         s: &Signals,
         i: usize,
-        omega: f64,
+        speed: Speed,
         dynamics_only: bool,
         step: f64,
     ) -> [f64; MAX_COLUMNS] {
         let mut r = [0.0; MAX_COLUMNS];
+        let (omega, drag) = match speed {
+            Speed::Measured => {
+                let omega = s.velocity[i];
+                let drag = if p.exponent == 2.0 {
+                    omega * omega.abs()
+                } else {
+                    // |ω|^p as exp(p·ln|ω|) from the logarithm kept in the signals (a third of
+                    // `powf`'s cost, in every pass of the exponent's tuning).
+                    (p.exponent * s.log_speed[i]).exp() * omega.signum()
+                };
+                (omega, if omega == 0.0 { 0.0 } else { drag })
+            }
+            Speed::Simulated { omega, drag } => (omega, drag),
+        };
         let sgn = if omega > 0.0 {
             1.0
         } else if omega < 0.0 {
@@ -353,15 +379,7 @@ impl Model {
             0.0
         };
         r[0] = p.force[i];
-        r[1] = if p.exponent == 2.0 {
-            -omega * omega.abs()
-        } else if omega == s.velocity[i] {
-            // The measured speed: |ω|^p as exp(p·ln|ω|) from the logarithm kept in the
-            // signals (a third of `powf`'s cost, in every pass of the exponent's tuning).
-            -(p.exponent * s.log_speed[i]).exp() * sgn
-        } else {
-            -omega.abs().powf(p.exponent) * sgn
-        };
+        r[1] = -drag;
         let mut c = 2;
         for e in &self.effects {
             match e.kind {
@@ -393,6 +411,20 @@ impl Model {
         }
         r
     }
+}
+
+/// The speed a regression row is evaluated at.
+#[derive(Clone, Copy, Debug)]
+enum Speed {
+    /// The measured speed at the row's sample (its logarithm is kept in the signals).
+    Measured,
+    /// A simulated speed and its drag term |ω|^p·sgn ω.
+    Simulated {
+        /// ω [rad/s].
+        omega: f64,
+        /// |ω|^p·sgn ω.
+        drag: f64,
+    },
 }
 
 /// A fit on some samples.
@@ -555,7 +587,7 @@ fn accumulate<const N: usize>(
     let mut eqs = vec![Stats::<N>::new(iv); folds];
     let len = range.len().max(1);
     for i in range.clone() {
-        let row = model.row(p, s, i, s.velocity[i], false, 0.0);
+        let row = model.row(p, s, i, Speed::Measured, false, 0.0);
         let phi: [f64; N] = core::array::from_fn(|k| row[k]);
         let z = if iv {
             let zr = model.instruments(s, i, row);
@@ -653,9 +685,13 @@ fn simulate(model: &Model, theta: &[f64], s: &Signals, range: Range<usize>) -> V
     let held = model.angle_columns();
     let accel = |i: usize, x: f64, w: f64| -> f64 {
         let step = s.t[i + 1] - s.t[i];
-        let r0 = model.row(&p, s, i, w, true, step);
+        let speed = Speed::Simulated {
+            omega: w,
+            drag: Model::drag(&p, w),
+        };
+        let r0 = model.row(&p, s, i, speed, true, step);
         let r = if x > 0.0 {
-            let r1 = model.row(&p, s, i + 1, w, true, step);
+            let r1 = model.row(&p, s, i + 1, speed, true, step);
             core::array::from_fn::<f64, MAX_COLUMNS, _>(|k| {
                 if held[k] {
                     r0[k]
@@ -1082,7 +1118,7 @@ fn residuals(model: &Model, fit: &Fit, s: &Signals) -> Vec<f64> {
     let p = model.prepare(s);
     (0..s.len())
         .map(|i| {
-            let r = model.row(&p, s, i, s.velocity[i], false, 0.0);
+            let r = model.row(&p, s, i, Speed::Measured, false, 0.0);
             s.acceleration[i] - fit.theta.iter().zip(r).map(|(a, b)| a * b).sum::<f64>()
         })
         .collect()
