@@ -1550,14 +1550,11 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
         // What the rival (the last effect of model `r`) adds to the winner's model `w`: when it
         // adds MIN_GAIN or more the two are complements (both present, as a telemetry lag and a
         // braking torque in the ESC32 F40 log), to be named one after the other, not rivals.
-        let rival_adds = |w: &Model, r: &Model| -> f64 {
+        let rival_adds = |w: &(Model, Cv, f64, usize, f64), r: &Model| -> f64 {
             let e = r.effects[r.effects.len() - 1];
-            let Some(base_cv) = cross_validate(w, s) else {
-                return f64::INFINITY;
-            };
-            w.with(e)
+            w.0.with(e)
                 .and_then(|m| cross_validate(&m, s))
-                .map_or(0.0, |cv| 1.0 - cv.mse / base_cv.mse)
+                .map_or(0.0, |cv| 1.0 - cv.mse / w.1.mse)
         };
         let rivals: Vec<&(Model, Cv, f64, usize, f64)> = passing
             .iter()
@@ -1568,7 +1565,7 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
                 let across = is_lag(p.3) != is_lag(passing[0].3)
                     && p.2 >= (1.0 - AMBIGUOUS_ACROSS) * passing[0].2
                     && p.4 > passing[0].4
-                    && rival_adds(&passing[0].0, &p.0) < MIN_GAIN;
+                    && rival_adds(&passing[0], &p.0) < MIN_GAIN;
                 !(is_lag(p.3) && is_lag(passing[0].3)) && (close || across)
             })
             .collect();
