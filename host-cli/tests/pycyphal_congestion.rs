@@ -27,7 +27,7 @@ use std::sync::mpsc::{channel, Receiver};
 use std::sync::{Mutex, OnceLock};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
-use common::{compile_pycyphal_dsdl, repo, require_python};
+use common::{assert_seed_setpoints, compile_pycyphal_dsdl, repo, require_python};
 
 /// The slow bus [bit/s].
 const BUS_BITRATE: &str = "125000";
@@ -353,17 +353,7 @@ fn standby_last(peer: &serde_json::Value) -> f64 {
         "{} setpoints decoded",
         setpoints.len()
     );
-    for sp in setpoints {
-        let v: Vec<f64> = sp
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        assert_eq!(v.len(), 31);
-        assert!(v.iter().all(|x| *x == v[0]), "all 31 elements equal: {v:?}");
-        assert!(v[0] == 0.0 || (0.0999..=0.9001).contains(&v[0]), "{}", v[0]);
-    }
+    assert_seed_setpoints(setpoints);
     assert_eq!(
         setpoints.last().unwrap()[0].as_f64().unwrap(),
         0.0,

@@ -15,7 +15,7 @@ mod common;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use common::{compile_pycyphal_dsdl, python_has, repo};
+use common::{assert_seed_setpoints, compile_pycyphal_dsdl, python_has, repo};
 
 /// What one run against PyCyphal produced.
 struct Interop {
@@ -188,17 +188,7 @@ fn propid_and_pycyphal_understand_each_other_over_slcan() {
     assert_eq!(readiness.last(), Some(&2), "{readiness:?}");
     let setpoints = report["setpoints"].as_array().unwrap();
     assert!(setpoints.len() > 50, "{}", setpoints.len());
-    for sp in setpoints {
-        let v: Vec<f64> = sp
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|x| x.as_f64().unwrap())
-            .collect();
-        assert_eq!(v.len(), 31);
-        assert!(v.iter().all(|x| *x == v[0]), "all 31 elements equal: {v:?}");
-        assert!(v[0] == 0.0 || (0.0999..=0.9001).contains(&v[0]), "{}", v[0]);
-    }
+    assert_seed_setpoints(setpoints);
     let first = setpoints[0][0].as_f64().unwrap();
     assert_eq!(
         first,

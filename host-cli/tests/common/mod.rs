@@ -95,3 +95,19 @@ pub fn compile_pycyphal_dsdl(out: &Path) {
         .unwrap();
     assert!(status.success(), "DSDL compilation");
 }
+
+/// Every setpoint a PyCyphal peer decoded from `propid drive` (a JSON array of 31-element
+/// arrays): all 31 elements equal, and either the stop's zero or within the seed's 0.1 … 0.9.
+pub fn assert_seed_setpoints(setpoints: &[serde_json::Value]) {
+    for sp in setpoints {
+        let v: Vec<f64> = sp
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect();
+        assert_eq!(v.len(), 31);
+        assert!(v.iter().all(|x| *x == v[0]), "all 31 elements equal: {v:?}");
+        assert!(v[0] == 0.0 || (0.0999..=0.9001).contains(&v[0]), "{}", v[0]);
+    }
+}

@@ -1582,16 +1582,14 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
             .copied();
         if let Some(rival) = rival {
             let (a, b) = (&candidates[passing[0].3], &candidates[rival.3]);
+            let run = separating_run(a.kind, b.kind);
             ambiguity = Some(Ambiguity {
                 between: [a.name, b.name],
                 values: [a.value, b.value],
                 units: [a.kind.unit(), b.kind.unit()],
                 cv_gain_percent: [passing[0].2 * 100.0, rival.2 * 100.0],
-                separate_with: {
-                    let run = separating_run(a.kind, b.kind);
-                    format!("`propid drive {}`: {}", run.flags(), run.why)
-                },
-                separating_run: separating_run(a.kind, b.kind),
+                separate_with: format!("`propid drive {}`: {}", run.flags(), run.why),
+                separating_run: run,
             });
             break;
         }
