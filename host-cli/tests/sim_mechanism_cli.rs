@@ -210,3 +210,65 @@ fn an_ambiguous_report_names_the_run_that_resolves_it() {
     let value = effects[0]["value"].as_f64().unwrap();
     assert!((value / 2e-6 - 1.0).abs() < 0.05, "{value}");
 }
+
+#[test]
+fn a_held_load_cell_is_read_as_a_delay_from_its_updates() {
+    // A load cell (100 Hz natural frequency, damping 0.2) read at 80 Hz, its readings repeated in
+    // 500 Hz rows. Each reading first shows in the row after it, 1 ms late on average, and the
+    // cell itself delays by 2ζ/ω_n: force_sensor_lag = 0.4/(2π·100) + 1/(2·500) = 1.64 ms, and J
+    // as the stand has it (read row by row, the staircase was a lag of 6–12 ms and J 2.5 % high).
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("cell.tsv");
+    let out = propid(
+        &[
+            "sim",
+            "--stand",
+            "mechanism",
+            "--report",
+            "load-cell",
+            "--pattern",
+            "chirp",
+            "--duration",
+            "60",
+            "--rate",
+            "500",
+            "--seed",
+            "3",
+            "-o",
+            tsv.to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = propid(
+        &["diagnose", "--format", "json", tsv.to_str().unwrap()],
+        None,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let effects = report["effects"].as_array().unwrap();
+    assert_eq!(effects.len(), 1, "{report:#}");
+    assert_eq!(effects[0]["name"], "force_sensor_lag", "{report:#}");
+    let form = effects[0]["lag_form"].as_str().unwrap();
+    assert!(form == "delay" || form == "first_order", "{form}");
+    let expected = 0.4 / (std::f64::consts::TAU * 100.0) + 0.5 / 500.0;
+    let lag = effects[0]["value"].as_f64().unwrap();
+    assert!((lag / expected - 1.0).abs() < 0.1, "{lag} for {expected}");
+    let notes = report["notes"].as_array().unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.as_str().unwrap().starts_with("the force updates every")),
+        "{report:#}"
+    );
+    let mass = report["extended"]["mass"].as_f64().unwrap();
+    assert!((mass / 2e-5 - 1.0).abs() < 0.02, "{mass}");
+}

@@ -442,15 +442,19 @@ impl Hidden {
                     offset: 0.0,
                     noise: 0.0,
                 };
-                // The cell ω_n²/(s² + 2ζω_n s + ω_n²) has group delay 2ζ/ω_n at low frequency;
-                // its samples are held until the next (zero-order hold of period T = 1/rate):
-                // delay T/2 on average, exactly T/2 in phase at every frequency. The cell carries
-                // the rotor–stator torque, which here (no bearing friction, no cogging) is Kt·i.
-                // force_sensor_lag = 2ζ/ω_n + 1/(2·rate). The hold also leaves a sawtooth error of
-                // RMS |Ḟ|·T/√12 that looks like noise.
+                // The cell ω_n²/(s² + 2ζω_n s + ω_n²) has group delay 2ζ/ω_n at low frequency.
+                // It carries the rotor–stator torque, which here (no bearing friction, no
+                // cogging) is Kt·i. Each reading (noise included) is held until the next, every
+                // T_c = 1/rate, and the rows (every T_r) show the latest. Each reading first
+                // shows in the row at or after it: T_r/2 late on average. Rows faster than the
+                // cell repeat its readings; a diagnosis that takes each reading at the row that
+                // first shows it (as a user reading the log would) sees the cell 2ζ/ω_n + T_r/2
+                // late. Rows slower than the cell see its latest reading, T_c/2 old on average.
+                // force_sensor_lag = 2ζ/ω_n + min(T_c, T_r)/2. Read row by row instead, the
+                // staircase would be T_c/2 late with a sawtooth error of RMS |Ḟ|·T_c/√12.
                 let wn = std::f64::consts::TAU * natural_hz;
                 let cell = 2.0 * damping / wn;
-                let lag = cell + 0.5 / rate;
+                let lag = cell + 0.5 / rate.max(c.link.rate);
                 (
                     rate,
                     Expect::Effect(ExpectedEffect {

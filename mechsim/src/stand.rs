@@ -453,7 +453,12 @@ impl MechStand {
                 self.hold.brake = if braking { b.torque } else { 0.0 };
             }
             while t_sim + 1e-12 >= cell_next {
-                cell_held = self.x[LCX] + cell_offset + cell_noise.sample(&mut self.rng);
+                // The report's force noise is the cell's too: drawn with its reading and held
+                // with it (a Tyto log repeats the exact value until the next reading).
+                cell_held = self.x[LCX]
+                    + cell_offset
+                    + cell_noise.sample(&mut self.rng)
+                    + noise_f.sample(&mut self.rng);
                 cell_next += cell_period;
             }
 
@@ -488,7 +493,11 @@ impl MechStand {
                                 + link.latency
                                 + latency.map_or(0.0, |e| e.sample(rng)),
                             t: tau + stamp.sample(rng),
-                            force: force + noise_f.sample(rng),
+                            force: if cell_period.is_finite() {
+                                force
+                            } else {
+                                force + noise_f.sample(rng)
+                            },
                             velocity: v_est / g + noise_v.sample(rng),
                             acceleration: a_est / (g * g) + noise_a.sample(rng),
                             position: position.rem_euclid(std::f64::consts::TAU),

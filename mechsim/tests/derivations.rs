@@ -5,6 +5,8 @@
 //! periods); for a first-order lag L, φ/ω = atan(ωL)/ω = L·(1 − (ωL)²/3 + …), under 0.6 % short of
 //! L for the lags drawn (≤ 25 ms); for the 2nd-order stages the correction is smaller still.
 
+mod common;
+
 use propid_mechsim::scenarios::{Bench, Condition, Expect, Hidden, Scenario, Where};
 use propid_mechsim::{pattern, MechConfig, Record};
 use rand::rngs::StdRng;
@@ -121,7 +123,11 @@ fn every_derivation_holds_on_simulated_data() {
                 ),
                 Hidden::LoadCell => close(
                     &name,
-                    delay(&recs, |r| r.truth.rotor_stator_torque, |r| r.force),
+                    delay(
+                        &common::readings_at_first_row(&recs),
+                        |r| r.truth.rotor_stator_torque,
+                        |r| r.force,
+                    ),
                     expected(&s),
                     0.03,
                 ),

@@ -80,7 +80,10 @@ fn describe(r: &Report) -> String {
     let effects: Vec<String> = r
         .effects
         .iter()
-        .map(|e| format!("{}={:.4e}", e.name, e.value))
+        .map(|e| match e.lag_form {
+            Some(form) => format!("{}={:.4e} ({form})", e.name, e.value),
+            None => format!("{}={:.4e}", e.name, e.value),
+        })
         .collect();
     format!(
         "{:?} [{}] ambiguous {:?}, J {:.4e}, c2 {:.4e}, sim {:.2} → {:.2}",
@@ -267,10 +270,22 @@ fn assert_right(hidden: &[Hidden], patterns: &[Pattern]) {
 /// (magnitudes, rates and noise; the `sweep` below found them right on ten draws per mechanism).
 #[test]
 fn mechanisms_are_named_and_measured() {
-    let mut hidden = vec![Hidden::CurrentLoopMeasured];
+    let mut hidden = vec![Hidden::CurrentLoopMeasured, Hidden::CurrentSenseFilter];
     hidden.extend(NOT_LAGS);
     hidden.push(Hidden::Cogging);
     assert_right(&hidden, &[Pattern::Sine, Pattern::Chirp]);
+}
+
+/// On a chirp, a held load cell (40–100 Hz, its readings repeated in 100–1000 Hz rows) and a
+/// filter on the reported acceleration, on the same four draws each. (On the sine, a held cell
+/// in fast rows lags 1–2 ms, at the limit of what a 0.5 Hz sine resolves: see the ignored test
+/// below.)
+#[test]
+fn held_load_cell_and_acceleration_filter_on_a_chirp() {
+    assert_right(
+        &[Hidden::LoadCell, Hidden::AccelerationFilter],
+        &[Pattern::Chirp],
+    );
 }
 
 /// On the staircase (lo, ¼, ½, ¾, hi, ¾, ½, ¼, each held 1 s) the mechanisms that are not lags,
@@ -286,19 +301,30 @@ fn mechanisms_on_steps_are_named_and_measured() {
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
 /// cannot find"); run with `-- --ignored` to see where each stands.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: braking at 100 Hz, an acceleration filter on the sine at 100 Hz, a long current-sense filter on the sine at 100 Hz, short current-loop lags on the sine, a fast velocity observer on the sine, a load cell held at 40-100 Hz"]
+#[ignore = "known failures, see docs/SCIENCE.md: braking at 100 Hz on a chirp, short current-loop lags on the sine, a fast velocity observer on the sine; on the sine, a held load cell in fast rows and an acceleration filter"]
 fn mechanisms_diagnose_still_gets_wrong() {
-    assert_right(
-        &[
-            Hidden::CurrentSenseFilter,
-            Hidden::AccelerationFilter,
-            Hidden::Braking,
-            Hidden::CurrentLoopDemand,
-            Hidden::VelocityObserver,
-            Hidden::LoadCell,
-        ],
-        &[Pattern::Sine, Pattern::Chirp],
-    );
+    let mut failures: Vec<String> = DRAWS
+        .iter()
+        .flat_map(|&seed| {
+            check(
+                &[
+                    Hidden::Braking,
+                    Hidden::CurrentLoopDemand,
+                    Hidden::VelocityObserver,
+                ],
+                seed,
+                &[Pattern::Sine, Pattern::Chirp],
+            )
+        })
+        .collect();
+    failures.extend(DRAWS.iter().flat_map(|&seed| {
+        check(
+            &[Hidden::LoadCell, Hidden::AccelerationFilter],
+            seed,
+            &[Pattern::Sine],
+        )
+    }));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// Every mechanism over several rng seeds (`PROPID_SWEEP=N`, default 4, from seed 1): how often
@@ -356,4 +382,24 @@ fn sweep() {
         table.push(format!("{:<22} wrong on {wrong} of {n} seeds", h.name()));
     }
     say(table.join("\n"));
+}
+
+/// A current-sense filter is a first-order lag, and the chirp tells that shape from a pure delay
+/// (`lag_form`), on the same four draws. (On the sine it cannot: see `LagForm`.)
+#[test]
+fn a_chirp_tells_a_filter_from_a_delay() {
+    for seed in DRAWS {
+        let mut rng = StdRng::seed_from_u64(seed);
+        let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
+        let s = Hidden::CurrentSenseFilter.draw(&bench(rate, Pattern::Chirp), &mut rng);
+        let r = run(&s, Pattern::Chirp, rng.random());
+        say(format!("seed {seed}: {}", describe(&r)));
+        let lag = r.effects.iter().find(|e| e.name == "force_sensor_lag");
+        assert_eq!(
+            lag.and_then(|e| e.lag_form),
+            Some("first_order"),
+            "seed {seed}: {}",
+            describe(&r)
+        );
+    }
 }

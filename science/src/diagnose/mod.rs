@@ -29,7 +29,7 @@ pub use steady::DragLaw;
 
 use serde::Serialize;
 
-pub use effects::{Effect, EffectKind};
+pub use effects::{Effect, EffectKind, LagForm};
 pub use gate::CannotJudge;
 
 /// Where a diagnosis is, for a progress display (the library never prints): on a log of an hour
@@ -143,6 +143,9 @@ pub struct NamedEffect {
     pub gain_percent: f64,
     /// Held-out acceleration-equation gain when it was selected [%].
     pub cv_gain_percent: f64,
+    /// For a lag, how it acts: `first_order` (a filter) or `delay` (a held or late sample).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lag_form: Option<&'static str>,
     /// A sentence on what it means.
     pub explanation: String,
 }
@@ -436,7 +439,8 @@ pub fn diagnose_rows_observed(
                     stderr: se,
                     gain_percent: f64::NAN,
                     cv_gain_percent: f64::NAN,
-                    explanation: effects::explanation(EffectKind::TimeBase, eps),
+                    lag_form: None,
+                    explanation: effects::explanation(Effect::new(EffectKind::TimeBase, eps), eps),
                 },
             );
             if report.verdict == Verdict::NothingWrong {
@@ -619,6 +623,7 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
             stderr: law.exponent_stderr,
             gain_percent: 100.0 * (1.0 - law.rms_extended / law.rms_seed),
             cv_gain_percent: law.cv_gain_percent,
+            lag_form: None,
             explanation: format!(
                 "the steady-state torque grows as |ω|^{:.3}, not ω²: the torque coefficient depends on speed",
                 law.exponent

@@ -38,6 +38,10 @@ pub struct Signals {
     pub acceleration_noise: f64,
     /// The same for the reported force [N·m].
     pub force_noise: f64,
+    /// Where the force is a held sample that updates more slowly than the rows (a load cell read
+    /// at 40 Hz in 500 Hz telemetry), how often it updates; `force` is then the reconstruction
+    /// (see [`Updates::reconstruct`]).
+    pub force_updates: Option<Updates>,
     /// First sample the regressions use: the first half second is a warm-up for the lag filters
     /// of the candidate models (their initial state is unknown), so every model is judged on the
     /// same samples.
@@ -106,7 +110,11 @@ impl Signals {
             )));
         }
         let t: Vec<f64> = samples.iter().map(|s| s.t).collect();
-        let force: Vec<f64> = samples.iter().map(|s| s.force).collect();
+        let mut force: Vec<f64> = samples.iter().map(|s| s.force).collect();
+        let force_updates = Updates::of(&t, &force);
+        if let Some(u) = &force_updates {
+            force = u.reconstruct(&t, &force);
+        }
         let acceleration: Vec<f64> = samples.iter().map(|s| s.acceleration).collect();
         let velocity: Vec<f64> = samples.iter().map(|s| s.velocity).collect();
         let position: Option<Vec<f64>> = samples
@@ -157,6 +165,7 @@ impl Signals {
             rate,
             acceleration_noise,
             force_noise,
+            force_updates,
         })
     }
 
@@ -211,16 +220,27 @@ impl Signals {
     /// With `steps_at_samples`, a step of the force (see [`Signals::force_steps_at`]) is taken to
     /// happen at the sample that first shows it: the old value holds over the interval before.
     pub fn lagged_force(&self, lag: f64, steps_at_samples: bool) -> Vec<f64> {
+        self.lagged(&self.force, lag, steps_at_samples)
+    }
+
+    /// The force as the load felt it if the sensor reports it `delay` seconds late: F(tᵢ + delay),
+    /// linear between samples (as the simulation takes every input), held past the last sample.
+    pub fn advanced_force(&self, delay: f64) -> Vec<f64> {
+        advanced(&self.t, &self.force, delay)
+    }
+
+    /// [`Signals::lagged_force`] of another force column `force` (one per sample).
+    pub fn lagged(&self, force: &[f64], lag: f64, steps_at_samples: bool) -> Vec<f64> {
         let mut out = Vec::with_capacity(self.len());
         if lag <= 0.0 {
-            out.extend_from_slice(&self.force);
+            out.extend_from_slice(force);
             return out;
         }
-        let mut y = self.force[0];
+        let mut y = force[0];
         out.push(y);
         for i in 1..self.len() {
             let dt = self.t[i] - self.t[i - 1];
-            let (x0, x1) = (self.force[i - 1], self.force[i]);
+            let (x0, x1) = (force[i - 1], force[i]);
             if dt > 0.0 && steps_at_samples && self.force_steps_at(i) {
                 y = x0 + (-dt / lag).exp() * (y - x0);
             } else if dt > 0.0 {
@@ -233,6 +253,95 @@ impl Signals {
         }
         out
     }
+}
+
+/// How a held signal updates: each value repeated over several rows until the sensor's next
+/// reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Updates {
+    /// Median interval between updates [s].
+    pub interval: f64,
+    /// Share of the rows that repeat the previous row's value exactly.
+    pub repeated: f64,
+}
+
+impl Updates {
+    /// Share of repeated rows from which a signal counts as held (a signal with noise never
+    /// repeats a value; a quantised one at rest does, in long runs the interval test refuses).
+    const MIN_REPEATED: f64 = 0.2;
+    /// Longest update interval of a held sensor [s]: values constant for longer are a constant
+    /// signal (a staircase command), not a slow sensor.
+    const MAX_INTERVAL: f64 = 0.1;
+
+    /// Measures whether `x` (at times `t`) is held: at least [`Self::MIN_REPEATED`] of its rows
+    /// repeat the previous value, and its values change every [`Self::MAX_INTERVAL`] or sooner
+    /// (median).
+    fn of(t: &[f64], x: &[f64]) -> Option<Updates> {
+        let n = x.len();
+        let changes: Vec<usize> = (1..n).filter(|&i| x[i] != x[i - 1]).collect();
+        let repeated = 1.0 - changes.len() as f64 / (n - 1).max(1) as f64;
+        if repeated < Self::MIN_REPEATED || changes.len() < 10 {
+            return None;
+        }
+        let mut intervals: Vec<f64> = changes.windows(2).map(|w| t[w[1]] - t[w[0]]).collect();
+        let mid = intervals.len() / 2;
+        let interval = *intervals.select_nth_unstable_by(mid, f64::total_cmp).1;
+        (interval > 0.0 && interval <= Self::MAX_INTERVAL).then_some(Updates { interval, repeated })
+    }
+
+    /// The held signal `x` as the sensor read it: each value at the row that first shows it,
+    /// linear between those rows. Where a value stays for more than three update intervals it
+    /// is a constant stretch of the signal itself, and is kept.
+    ///
+    /// Why: a held sample is the sensor's reading of some moment in the interval before it first
+    /// shows, repeated until the next one. Taken row by row, the staircase delays the signal by
+    /// half the update interval on average and scatters that delay sample to sample by ±half,
+    /// an error ∝ |Ẋ| that a model of the load then fits (a 56 Hz load cell in 100 Hz rows read
+    /// as a force-sensor lag plus a drag exponent of 2.14).
+    fn reconstruct(&self, t: &[f64], x: &[f64]) -> Vec<f64> {
+        let n = x.len();
+        let mut out = x.to_vec();
+        let mut knot = 0;
+        for i in 1..n {
+            if x[i] == x[i - 1] {
+                continue;
+            }
+            let span = t[i] - t[knot];
+            if knot > 0 && span > 0.0 && span <= 3.0 * self.interval {
+                for (k, y) in out.iter_mut().enumerate().take(i).skip(knot + 1) {
+                    *y = x[knot] + (x[i] - x[knot]) * (t[k] - t[knot]) / span;
+                }
+            }
+            knot = i;
+        }
+        out
+    }
+}
+
+/// The force `delay` seconds after each sample, F(tᵢ + delay), linear between samples and
+/// held past the last: the torque the load felt at tᵢ, if the sensor reports it `delay` late (a
+/// held or transported sample).
+fn advanced(t: &[f64], force: &[f64], delay: f64) -> Vec<f64> {
+    let n = force.len();
+    let mut j = 0;
+    (0..n)
+        .map(|i| {
+            let target = t[i] + delay;
+            while j + 1 < n && t[j + 1] <= target {
+                j += 1;
+            }
+            if j + 1 >= n {
+                return force[n - 1];
+            }
+            let dt = t[j + 1] - t[j];
+            let w = if dt > 0.0 {
+                ((target - t[j]) / dt).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            force[j] + w * (force[j + 1] - force[j])
+        })
+        .collect()
 }
 
 /// A signal's sample-to-sample noise σ: from the median absolute deviation of
@@ -267,5 +376,60 @@ pub fn correlation(x: &[f64], y: &[f64]) -> f64 {
         0.0
     } else {
         sxy / (sxx * syy).sqrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_held_signal_is_measured_and_read_at_its_updates() {
+        // A reading every 3 rows (1 ms rows), each shown first at rows 0, 3, 6, …
+        let t: Vec<f64> = (0..60).map(|i| i as f64 * 1e-3).collect();
+        let x: Vec<f64> = (0..60).map(|i| (i / 3) as f64).collect();
+        let u = Updates::of(&t, &x).expect("held");
+        assert!((u.interval - 3e-3).abs() < 1e-12, "{u:?}");
+        assert!((u.repeated - 40.0 / 59.0).abs() < 1e-12, "{u:?}");
+        let y = u.reconstruct(&t, &x);
+        // Before the first update the start is unknown: kept. Then linear between updates.
+        assert_eq!(&y[..4], &[0.0, 0.0, 0.0, 1.0]);
+        assert!((y[4] - 4.0 / 3.0).abs() < 1e-12 && (y[5] - 5.0 / 3.0).abs() < 1e-12);
+        assert_eq!(y[6], 2.0);
+        // After the last update nothing follows: kept.
+        assert_eq!(&y[57..], &[19.0, 19.0, 19.0]);
+    }
+
+    #[test]
+    fn a_noisy_or_slow_staircase_is_not_a_held_sensor() {
+        let t: Vec<f64> = (0..600).map(|i| i as f64 * 1e-3).collect();
+        // Every row new: not held.
+        let noisy: Vec<f64> = (0..600).map(|i| ((i * 7919) % 101) as f64).collect();
+        assert_eq!(Updates::of(&t, &noisy), None);
+        // A command held 0.2 s at a time: a constant signal, not a slow sensor.
+        let staircase: Vec<f64> = (0..600).map(|i| (i / 200) as f64).collect();
+        assert_eq!(Updates::of(&t, &staircase), None);
+    }
+
+    #[test]
+    fn a_long_constant_stretch_is_kept_in_a_held_signal() {
+        // Updates every 2 rows, then one value for 20 rows (longer than three intervals).
+        let t: Vec<f64> = (0..60).map(|i| i as f64 * 1e-3).collect();
+        let mut x: Vec<f64> = (0..60).map(|i| (i / 2) as f64).collect();
+        for v in &mut x[30..50] {
+            *v = 15.0;
+        }
+        let u = Updates::of(&t, &x).expect("held");
+        let y = u.reconstruct(&t, &x);
+        assert!(y[30..50].iter().all(|v| *v == 15.0), "{:?}", &y[30..50]);
+        assert_eq!(y[29], 14.5);
+    }
+
+    #[test]
+    fn the_advanced_force_is_linear_between_samples_and_held_past_the_end() {
+        let t = [0.0, 1.0, 2.0, 3.0];
+        let f = [0.0, 10.0, 20.0, 40.0];
+        assert_eq!(advanced(&t, &f, 0.25), vec![2.5, 12.5, 25.0, 40.0]);
+        assert_eq!(advanced(&t, &f, 1.5), vec![15.0, 30.0, 40.0, 40.0]);
     }
 }
