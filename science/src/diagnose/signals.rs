@@ -187,18 +187,27 @@ impl Signals {
     }
 
     /// Whether the force steps between samples i − 1 and i: it changes by more than eight times
-    /// its noise and four times as much as over either neighbouring interval (a step of the
-    /// command, not a steep stretch of a smooth one).
+    /// its noise, and four times as fast as over either neighbouring interval (a step of the
+    /// command, not a steep stretch of a smooth one, nor the longer interval of a lost message:
+    /// compared as changes, 17 % lost messages made 21 "steps" in 12,318 samples of a sine).
     pub fn force_steps_at(&self, i: usize) -> bool {
         let n = self.len();
         if i == 0 || i >= n {
             return false;
         }
         let d = |k: usize| (self.force[k] - self.force[k - 1]).abs();
+        let rate = |k: usize| {
+            let dt = self.t[k] - self.t[k - 1];
+            if dt > 0.0 {
+                d(k) / dt
+            } else {
+                f64::INFINITY
+            }
+        };
         let here = d(i);
-        let before = if i >= 2 { d(i - 1) } else { 0.0 };
-        let after = if i + 1 < n { d(i + 1) } else { 0.0 };
-        here > 8.0 * self.force_noise && here > 4.0 * before.max(after)
+        let before = if i >= 2 { rate(i - 1) } else { 0.0 };
+        let after = if i + 1 < n { rate(i + 1) } else { 0.0 };
+        here > 8.0 * self.force_noise && rate(i) > 4.0 * before.max(after)
     }
 
     /// Whether the force has steps at all (one in a thousand intervals at least).
