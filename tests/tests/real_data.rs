@@ -209,3 +209,53 @@ fn esc32_f60_remaining_error_is_localized() {
     assert!((c.error_percent - 50.1).abs() < 1.0, "{c:?}");
     assert!((c.samples_percent - 10.0).abs() < 0.5, "{c:?}");
 }
+
+/// docs/REAL_DATA.md §3, F60: where the error sits is where the duty reaches 100 %. There the
+/// rotor slows (the duty rose from 95 %) and Kt·I_bus/duty per ω² reads 5 % below every other
+/// step at speed: the force the log reports is wrong at full duty.
+#[test]
+fn esc32_f60_error_sits_at_full_duty() {
+    let (imported, r) = autoquad("esc32v3_f60-1", 1750.0);
+    let duty = imported.command.expect("the ESC32 log has its duty");
+    // Per duty step: its time span, mean speed and Σ F / Σ ω² (the drag law's c2 at that step).
+    let step = |d: f64| {
+        let rows: Vec<(f64, f64, f64)> = imported
+            .rows
+            .iter()
+            .zip(&duty)
+            .filter(|(row, &c)| {
+                (c - d).abs() < 1e-6 && row.sample.force.is_finite() && row.sample.velocity > 100.0
+            })
+            .map(|(row, _)| (row.sample.t, row.sample.force, row.sample.velocity))
+            .collect();
+        let c2 =
+            rows.iter().map(|r| r.1).sum::<f64>() / rows.iter().map(|r| r.2 * r.2).sum::<f64>();
+        let speed = rows.iter().map(|r| r.2).sum::<f64>() / rows.len() as f64;
+        (rows[0].0, rows[rows.len() - 1].0, speed, c2)
+    };
+    let full = step(100.0);
+    let below: Vec<(f64, f64, f64, f64)> = [65.0, 70.0, 75.0, 80.0, 85.0, 90.0, 95.0]
+        .map(step)
+        .to_vec();
+    printed("full duty from", full.0, 91.8, 1);
+    printed("full duty to", full.1, 94.1, 1);
+    printed("speed at 95 %", below[6].2, 1683.0, 0);
+    printed("speed at 100 %", full.2, 1611.0, 0);
+    printed("c2 at 100 % [1e-8]", full.3 * 1e8, 5.01, 2);
+    let (lo, hi) = below.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), s| {
+        (lo.min(s.3), hi.max(s.3))
+    });
+    printed("c2 at 65-95 %, lowest [1e-8]", lo * 1e8, 5.24, 2);
+    printed("c2 at 65-95 %, highest [1e-8]", hi * 1e8, 5.29, 2);
+    // The concentration window starts within the full-duty step and covers most of it (the
+    // simulated velocity drifts from there until the duty falls and a while after).
+    let c = r.concentration.as_ref().expect("the error is localized");
+    assert!(
+        c.from_s > full.0 && c.from_s < full.1,
+        "{c:?} against {full:?}"
+    );
+    assert!(
+        (full.1 - c.from_s) / (full.1 - full.0) > 0.6,
+        "{c:?} against {full:?}"
+    );
+}

@@ -42,6 +42,8 @@ pub struct Signals {
     /// at 40 Hz in 500 Hz telemetry), how often it updates; `force` is then the reconstruction
     /// (see [`Updates::reconstruct`]).
     pub force_updates: Option<Updates>,
+    /// Whether the force steps (see [`Signals::has_force_steps`]).
+    force_steps: bool,
     /// First sample the regressions use: the first half second is a warm-up for the lag filters
     /// of the candidate models (their initial state is unknown), so every model is judged on the
     /// same samples.
@@ -150,7 +152,7 @@ impl Signals {
         let force_noise = noise_of(&force);
         let force_rate = local_slope(&t, &force, h);
         let jerk = local_slope(&t, &acceleration, h);
-        Ok(Signals {
+        let mut signals = Signals {
             first,
             slope_half_width: h,
             log_speed: velocity.iter().map(|w| w.abs().ln()).collect(),
@@ -166,7 +168,10 @@ impl Signals {
             acceleration_noise,
             force_noise,
             force_updates,
-        })
+            force_steps: false,
+        };
+        signals.force_steps = signals.count_force_steps();
+        Ok(signals)
     }
 
     /// Instrument for Ḟ at sample `i`: the difference quotient of the force samples just outside
@@ -210,8 +215,13 @@ impl Signals {
         here > 8.0 * self.force_noise && rate(i) > 4.0 * before.max(after)
     }
 
-    /// Whether the force has steps at all (one in a thousand intervals at least).
+    /// Whether the force has steps at all (one in a thousand intervals at least); counted once,
+    /// in [`Signals::new`].
     pub fn has_force_steps(&self) -> bool {
+        self.force_steps
+    }
+
+    fn count_force_steps(&self) -> bool {
         let n = self.len();
         (1..n).filter(|&i| self.force_steps_at(i)).count() * 1000 >= n
     }
