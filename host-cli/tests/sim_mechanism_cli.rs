@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{propid, yaml_value};
+use common::{diagnose_json, propid, propid_ok, yaml_value};
 
 #[test]
 fn mechanism_stand_writes_a_tsv_that_fit_reads() {
@@ -172,19 +172,7 @@ fn an_ambiguous_report_names_the_run_that_resolves_it() {
         );
         tsv
     };
-    let diagnose = |tsv: &std::path::Path| -> serde_json::Value {
-        let out = propid(
-            &["diagnose", "--format", "json", tsv.to_str().unwrap()],
-            None,
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        serde_json::from_slice(&out.stdout).unwrap()
-    };
-    let first = diagnose(&sim("chirp.tsv", &["--pattern", "chirp"]));
+    let first = diagnose_json(&sim("chirp.tsv", &["--pattern", "chirp"]));
     assert_eq!(first["verdict"]["kind"], "ambiguous", "{first:#}");
     let a = &first["ambiguity"];
     assert!(
@@ -199,7 +187,7 @@ fn an_ambiguous_report_names_the_run_that_resolves_it() {
     assert_eq!(run["pattern"], "steps", "{a:#}");
     let (lo, hi) = (run["lo"].as_f64().unwrap(), run["hi"].as_f64().unwrap());
     let (lo, hi) = (lo.to_string(), hi.to_string());
-    let second = diagnose(&sim(
+    let second = diagnose_json(&sim(
         "advised.tsv",
         &["--pattern", "steps", "--lo", &lo, "--hi", &hi],
     ));
@@ -219,41 +207,24 @@ fn a_held_load_cell_is_read_as_a_delay_from_its_updates() {
     // as the stand has it (read row by row, the staircase was a lag of 6–12 ms and J 2.5 % high).
     let dir = tempfile::tempdir().unwrap();
     let tsv = dir.path().join("cell.tsv");
-    let out = propid(
-        &[
-            "sim",
-            "--stand",
-            "mechanism",
-            "--report",
-            "load-cell",
-            "--pattern",
-            "chirp",
-            "--duration",
-            "60",
-            "--rate",
-            "500",
-            "--seed",
-            "3",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let out = propid(
-        &["diagnose", "--format", "json", tsv.to_str().unwrap()],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    propid_ok(&[
+        "sim",
+        "--stand",
+        "mechanism",
+        "--report",
+        "load-cell",
+        "--pattern",
+        "chirp",
+        "--duration",
+        "60",
+        "--rate",
+        "500",
+        "--seed",
+        "3",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    let report = diagnose_json(&tsv);
     let effects = report["effects"].as_array().unwrap();
     assert_eq!(effects.len(), 1, "{report:#}");
     assert_eq!(effects[0]["name"], "force_sensor_lag", "{report:#}");

@@ -32,6 +32,27 @@ pub fn propid(args: &[&str], stdin: Option<&[u8]>) -> Output {
     child.wait_with_output().unwrap()
 }
 
+/// Runs `propid` with `args` (no stdin) and panics, with its arguments and its standard error,
+/// unless it succeeds.
+#[track_caller]
+pub fn propid_ok(args: &[&str]) -> Output {
+    let out = propid(args, None);
+    assert!(
+        out.status.success(),
+        "propid {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// `propid diagnose --format json` of `tsv`, which must succeed, as JSON.
+#[track_caller]
+pub fn diagnose_json(tsv: &Path) -> serde_json::Value {
+    let out = propid_ok(&["diagnose", "--format", "json", tsv.to_str().unwrap()]);
+    serde_json::from_slice(&out.stdout).expect("diagnose writes JSON")
+}
+
 /// Panics unless `python3` can import the given modules. The tests that call this are
 /// `#[ignore = "needs …"]`: they run only when asked (`cargo test … -- --ignored`, as
 /// ci/steps/30-python-peers.sh does after ci/setup.sh installed the packages), and then a missing
