@@ -463,6 +463,9 @@ function redraw() {{
 }}
 let last = 0;
 const source = new EventSource("/events?token=" + TOKEN);
+// Once STOP is acknowledged, an update still in flight from before it (status "running") must
+// not take the acknowledgement off the page; the drive's final status replaces it.
+let stopping = false;
 source.onmessage = (ev) => {{
   const u = JSON.parse(ev.data);
   for (const p of u.points) {{
@@ -473,7 +476,7 @@ source.onmessage = (ev) => {{
     est.c2.push(e.c2); est.clo.push(e.c2 - 2 * e.c2_stderr); est.chi.push(e.c2 + 2 * e.c2_stderr);
   }}
   last = u.seq;
-  document.getElementById("status").textContent = u.status || "running";
+  if (!stopping || u.finished) document.getElementById("status").textContent = u.status || "running";
   document.getElementById("readiness").textContent = u.readiness || "–";
   const e = est.j.length ? est.j.length - 1 : -1;
   document.getElementById("j").textContent = e >= 0 ? fmt(est.j[e]) + " ± " + fmt((est.jhi[e] - est.j[e]) / 2) : "–";
@@ -490,6 +493,7 @@ source.onmessage = (ev) => {{
 }};
 document.getElementById("stop").onclick = async () => {{
   const r = await fetch("/stop", {{method: "POST", headers: {{"X-Propid-Token": TOKEN}}}});
+  stopping = r.ok;
   document.getElementById("status").textContent = await r.text();
 }};
 </script>
@@ -579,8 +583,28 @@ impl DriveView {
             }
             DriveEvent::Stopped(report) => {
                 self.feed.readiness("STANDBY");
+                // The page's last word says what was sent (a STANDBY the drive never handed to
+                // the link is not claimed): the final status replaces "stopping …: STANDBY", and
+                // once said "stopped (…); N rows" without it, so the safety state left the page.
+                let sent = format!(
+                    "{}{} zero setpoint{} sent",
+                    if report.standby_sent > 0 {
+                        "STANDBY and "
+                    } else {
+                        ""
+                    },
+                    report.zero_setpoints_sent,
+                    if report.zero_setpoints_sent == 1 {
+                        ""
+                    } else {
+                        "s"
+                    },
+                );
                 self.feed.status(
-                    format!("stopped ({}); {} rows recorded", report.reason, report.rows),
+                    format!(
+                        "stopped ({}): {sent}; {} rows recorded",
+                        report.reason, report.rows
+                    ),
                     true,
                 );
                 self.feed.flush();

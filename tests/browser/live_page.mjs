@@ -24,7 +24,13 @@ try {
   if (readiness !== "ENGAGED") throw new Error(`readiness ${readiness}`);
   if (shot) await page.screenshot({ path: shot, fullPage: false });
   await page.click("#stop");
-  await page.waitForFunction(() => /STANDBY/.test(document.getElementById("status").textContent), null, { timeout: 15000 });
+  try {
+    await page.waitForFunction(() => /STANDBY/.test(document.getElementById("status").textContent), null, { timeout: 15000 });
+  } catch (e) {
+    const status = await page.locator("#status").textContent();
+    const finished = await page.evaluate(() => document.body.dataset.finished);
+    throw new Error(`no STANDBY 15 s after STOP: status "${status}", finished ${finished}: ${e.message}`);
+  }
   console.log("ok: live data, 5 charts, estimate shown, STOP pressed:", await page.locator("#status").textContent());
 } finally {
   await browser.close();
