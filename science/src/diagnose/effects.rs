@@ -346,12 +346,12 @@ impl Model {
         self.effects.iter().any(|e| e.differentiated())
     }
 
-    /// Whether an acceleration lag on the model's side passes every column through it (see
-    /// [`measured_rows`]).
-    fn lags_every_column(&self) -> bool {
+    /// The acceleration lag on the model's side, if the model has one: it passes every column
+    /// through it (see [`measured_rows`]).
+    fn model_side_lag(&self) -> Option<&Effect> {
         self.effects
             .iter()
-            .any(|e| e.kind == EffectKind::AccelerationLag && e.shifts_columns())
+            .find(|e| e.kind == EffectKind::AccelerationLag && e.shifts_columns())
     }
 
     fn has(&self, kind: EffectKind) -> bool {
@@ -422,7 +422,7 @@ impl Model {
         let mut c = 2;
         for e in &self.effects {
             match e.kind {
-                EffectKind::ForceSensorLag if e.form != LagForm::Delay => {
+                EffectKind::ForceSensorLag if !e.shifts_columns() => {
                     row[c] = s.force_rate_instrument(i)
                 }
                 EffectKind::AccelerationLag if !e.shifts_columns() => {
@@ -492,7 +492,7 @@ impl Model {
                 EffectKind::ForceOffset => r[c] = -1.0,
                 EffectKind::BrakingTorque => r[c] = -sgn * p.braking[i],
                 EffectKind::ViscousFriction => r[c] = -omega,
-                EffectKind::ForceSensorLag if e.form == LagForm::Delay => {}
+                EffectKind::ForceSensorLag if e.shifts_columns() => {}
                 EffectKind::ForceSensorLag => r[c] = s.force_rate[i],
                 EffectKind::AccelerationLag if e.shifts_columns() => {}
                 EffectKind::AccelerationLag => r[c] = if dynamics_only { 0.0 } else { -s.jerk[i] },
@@ -693,7 +693,7 @@ fn accumulate<const N: usize>(
 ) -> Vec<Stats<N>> {
     let mut eqs = vec![Stats::<N>::new(iv); folds];
     let len = range.len().max(1);
-    if model.lags_every_column() {
+    if model.model_side_lag().is_some() {
         for (i, row) in measured_rows(model, p, s, range.clone()) {
             let fold = (i - range.start) * folds / len;
             add_row(&mut eqs[fold], model, s, i, row, iv);
@@ -1071,7 +1071,7 @@ fn effect_value(model: &Model, index: usize, fit: &Fit, s: &Signals) -> (f64, f6
         | EffectKind::ForceOffset
         | EffectKind::BrakingTorque => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
         EffectKind::TimeBase => (e.param, f64::NAN),
-        EffectKind::ForceSensorLag if e.form == LagForm::Delay => profiled(model, index, fit, s),
+        EffectKind::ForceSensorLag if e.shifts_columns() => profiled(model, index, fit, s),
         // The derivative's coefficient is the time constant itself: the slopes are centred and
         // a drive's signals are continuous between samples (no half-sample correction).
         EffectKind::ForceSensorLag => (fit.theta[col] / t0, fit.stderr[col] / t0.abs()),
@@ -1333,9 +1333,7 @@ fn measured_rows<'a>(
     range: Range<usize>,
 ) -> impl Iterator<Item = (usize, [f64; MAX_COLUMNS])> + 'a {
     let lag = model
-        .effects
-        .iter()
-        .find(|e| e.kind == EffectKind::AccelerationLag && e.shifts_columns())
+        .model_side_lag()
         .map(|e| (e.param, e.form.steps_at_samples()));
     let from = if lag.is_some() { 0 } else { range.start };
     let mut state: Option<(f64, [f64; MAX_COLUMNS], [f64; MAX_COLUMNS])> = None;
@@ -1442,6 +1440,20 @@ pub const AMBIGUOUS: f64 = 0.02;
 pub const AMBIGUOUS_ACROSS: f64 = 0.5;
 
 /// The `propid drive` run that tells `a` from `b`.
+/// The report that `a` and `b` (held-out acceleration gains `gain_a`, `gain_b`, as fractions)
+/// explain the data about equally well, with the run that would separate them.
+fn ambiguous(a: &CandidateScore, b: &CandidateScore, gain_a: f64, gain_b: f64) -> Ambiguity {
+    let run = separating_run(a.kind, b.kind);
+    Ambiguity {
+        between: [a.name, b.name],
+        values: [a.value, b.value],
+        units: [a.kind.unit(), b.kind.unit()],
+        cv_gain_percent: [gain_a * 100.0, gain_b * 100.0],
+        separate_with: format!("`propid drive {}`: {}", run.flags(), run.why),
+        separating_run: run,
+    }
+}
+
 fn separating_run(a: EffectKind, b: EffectKind) -> SeparatingRun {
     use EffectKind::*;
     let pair = |x: EffectKind, y: EffectKind| (a == x && b == y) || (a == y && b == x);
@@ -1781,16 +1793,7 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
                 // 100 Hz gained 95.94 % on held-out acceleration against a torque lag's 95.87 %,
                 // and 38.1 % against 40.4 % in the simulation. Ambiguous, then.
                 if (r.4 - w.4).abs() < LAG_SIMULATION_TIE * w.4.abs().max(r.4.abs()) {
-                    let (a, b) = (&candidates[w.3], &candidates[r.3]);
-                    let run = separating_run(a.kind, b.kind);
-                    ambiguity = Some(Ambiguity {
-                        between: [a.name, b.name],
-                        values: [a.value, b.value],
-                        units: [a.kind.unit(), b.kind.unit()],
-                        cv_gain_percent: [w.2 * 100.0, r.2 * 100.0],
-                        separate_with: format!("`propid drive {}`: {}", run.flags(), run.why),
-                        separating_run: run,
-                    });
+                    ambiguity = Some(ambiguous(&candidates[w.3], &candidates[r.3], w.2, r.2));
                     break;
                 }
                 let swap = r.4 > w.4;
@@ -1860,16 +1863,12 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
             .or_else(|| rivals.first())
             .copied();
         if let Some(rival) = rival {
-            let (a, b) = (&candidates[passing[0].3], &candidates[rival.3]);
-            let run = separating_run(a.kind, b.kind);
-            ambiguity = Some(Ambiguity {
-                between: [a.name, b.name],
-                values: [a.value, b.value],
-                units: [a.kind.unit(), b.kind.unit()],
-                cv_gain_percent: [passing[0].2 * 100.0, rival.2 * 100.0],
-                separate_with: format!("`propid drive {}`: {}", run.flags(), run.why),
-                separating_run: run,
-            });
+            ambiguity = Some(ambiguous(
+                &candidates[passing[0].3],
+                &candidates[rival.3],
+                passing[0].2,
+                rival.2,
+            ));
             break;
         }
         let best = passing
