@@ -164,12 +164,24 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
         Expect::Unexplained { .. } => unreachable!("not drawn here"),
     }
     if r.ambiguity.is_none() && !matches!(r.verdict, Verdict::CannotJudge { .. }) {
-        // A drag law k·|ω|^p is compared by its k (extended.c2 is its quadratic equivalent).
-        let (j, c2) = (r.extended.mass, r.extended.k.unwrap_or(r.extended.c2));
-        if (j / s.fit.inertia - 1.0).abs() > 0.02 || (c2 / s.fit.c2 - 1.0).abs() > 0.02 {
+        // A drag law k·|ω|^p is compared by its torque at the steady speed of the middle
+        // command, inside the data: k alone is the torque at 1 rad/s, three decades below them,
+        // where an exponent off by 0.0035 (2.1758 for 2.1723, 0.16 %) moves it by 2.6 %.
+        let j = r.extended.mass;
+        let (k, p) = (s.fit.c2, s.fit.drag_exponent);
+        let mid = 0.5 * (s.bench.lo + s.bench.hi) * s.bench.base.drive.max_torque;
+        let w = (mid / k).powf(1.0 / p);
+        let (k_hat, p_hat) = match (r.extended.k, r.extended.p) {
+            (Some(k_hat), Some(p_hat)) => (k_hat, p_hat),
+            _ => (r.extended.c2, 2.0),
+        };
+        let drag = k_hat * w.powf(p_hat) / (k * w.powf(p));
+        if (j / s.fit.inertia - 1.0).abs() > 0.02 || (drag - 1.0).abs() > 0.02 {
             bad.push(format!(
-                "extended J {j:.4e} (expected {:.4e}), c2 {c2:.4e} (expected {:.4e})",
-                s.fit.inertia, s.fit.c2
+                "extended J {j:.4e} (expected {:.4e}), drag law {k_hat:.4e}·|ω|^{p_hat:.4} \
+                 (expected {k:.4e}·|ω|^{p:.4}: {:+.1} % at {w:.0} rad/s)",
+                s.fit.inertia,
+                (drag - 1.0) * 100.0
             ));
         }
     }
@@ -270,22 +282,23 @@ fn assert_right(hidden: &[Hidden], patterns: &[Pattern]) {
 /// (magnitudes, rates and noise; the `sweep` below found them right on ten draws per mechanism).
 #[test]
 fn mechanisms_are_named_and_measured() {
-    let mut hidden = vec![Hidden::CurrentLoopMeasured, Hidden::CurrentSenseFilter];
+    let mut hidden = vec![
+        Hidden::CurrentLoopDemand,
+        Hidden::CurrentLoopMeasured,
+        Hidden::CurrentSenseFilter,
+        Hidden::AccelerationFilter,
+    ];
     hidden.extend(NOT_LAGS);
     hidden.push(Hidden::Cogging);
     assert_right(&hidden, &[Pattern::Sine, Pattern::Chirp]);
 }
 
-/// On a chirp, a held load cell (40–100 Hz, its readings repeated in 100–1000 Hz rows) and a
-/// filter on the reported acceleration, on the same four draws each. (On the sine, a held cell
-/// in fast rows lags 1–2 ms, at the limit of what a 0.5 Hz sine resolves: see the ignored test
-/// below.)
+/// On a chirp, a held load cell (40–100 Hz, its readings repeated in 100–1000 Hz rows), on the
+/// same four draws. (On the sine, a held cell in 1 kHz rows lags 1–2 ms, at the limit of what a
+/// 0.5 Hz sine resolves: see the ignored test below.)
 #[test]
-fn held_load_cell_and_acceleration_filter_on_a_chirp() {
-    assert_right(
-        &[Hidden::LoadCell, Hidden::AccelerationFilter],
-        &[Pattern::Chirp],
-    );
+fn held_load_cell_on_a_chirp() {
+    assert_right(&[Hidden::LoadCell], &[Pattern::Chirp]);
 }
 
 /// On the staircase (lo, ¼, ½, ¾, hi, ¾, ½, ¼, each held 1 s) the mechanisms that are not lags,
@@ -303,29 +316,23 @@ fn mechanisms_on_steps_are_named_and_measured() {
 /// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
 /// cannot find"); run with `-- --ignored` to see where each stands.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: braking at 100 Hz on a chirp, short current-loop lags on the sine, a fast velocity observer on the sine; on the sine, a held load cell in fast rows and an acceleration filter"]
+#[ignore = "known failures, see docs/SCIENCE.md: braking at 100 Hz on a chirp, a fast velocity observer on the sine, a held load cell in 1 kHz rows on the sine"]
 fn mechanisms_diagnose_still_gets_wrong() {
     let mut failures: Vec<String> = DRAWS
         .iter()
         .flat_map(|&seed| {
             check(
-                &[
-                    Hidden::Braking,
-                    Hidden::CurrentLoopDemand,
-                    Hidden::VelocityObserver,
-                ],
+                &[Hidden::Braking, Hidden::VelocityObserver],
                 seed,
                 &[Pattern::Sine, Pattern::Chirp],
             )
         })
         .collect();
-    failures.extend(DRAWS.iter().flat_map(|&seed| {
-        check(
-            &[Hidden::LoadCell, Hidden::AccelerationFilter],
-            seed,
-            &[Pattern::Sine],
-        )
-    }));
+    failures.extend(
+        DRAWS
+            .iter()
+            .flat_map(|&seed| check(&[Hidden::LoadCell], seed, &[Pattern::Sine])),
+    );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
