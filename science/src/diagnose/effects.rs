@@ -368,9 +368,26 @@ fn braking_samples(s: &Signals, on: f64) -> Vec<f64> {
         })
         .collect();
     let n = state.len();
-    let on_at = |j: usize| if state[j] { 0.5 } else { 0.0 };
+    let margin = 3.0 * s.acceleration_noise;
     (0..n)
-        .map(|i| on_at(i.saturating_sub(1)) + on_at((i + 1).min(n - 1)))
+        .map(|i| {
+            let (before, after) = (state[i.saturating_sub(1)], state[(i + 1).min(n - 1)]);
+            if before == after {
+                return if before { 1.0 } else { 0.0 };
+            }
+            // A switch beside sample i: the level it crosses (the threshold when the brake
+            // engages, zero when it releases) decides, where the sample's own acceleration is
+            // three noise σ beyond it.
+            let level = if after { on } else { 0.0 };
+            let slowing = s.slowing(i);
+            if slowing > level + margin {
+                1.0
+            } else if slowing < level - margin {
+                0.0
+            } else {
+                0.5
+            }
+        })
         .collect()
 }
 
@@ -1939,7 +1956,9 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
             .skip(1)
             .filter(|p| {
                 let close = p.2 >= (1.0 - AMBIGUOUS) * passing[0].2
-                    && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER || p.4 > passing[0].4);
+                    && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER
+                        || p.4 > passing[0].4
+                        || simulation_tie(p.4, passing[0].4));
                 let across = is_lag(p.3) != is_lag(passing[0].3)
                     && p.2 >= (1.0 - AMBIGUOUS_ACROSS) * passing[0].2
                     && (p.4 > passing[0].4 || simulation_tie(p.4, passing[0].4))
