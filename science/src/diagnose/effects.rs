@@ -965,9 +965,18 @@ pub(super) fn golden(mut lo: f64, mut hi: f64, f: impl Fn(f64) -> f64, iteration
     }
 }
 
+/// An effect's parameter as tuned, with the cross-validation of the model that adds it where
+/// the tuning already ran it (`try_candidate` then does not run it again).
+type Tuned = (Effect, Option<Cv>);
+
+/// The held-out mean squared error of a cross-validation that may have failed.
+fn mse_of(cv: &Option<Cv>) -> f64 {
+    cv.as_ref().map_or(f64::INFINITY, |c| c.mse)
+}
+
 /// Chooses the nonlinear parameter of `kind` added to `model` by the held-out error: a grid,
 /// then a refinement between the best point's neighbours.
-fn tune(model: &Model, kind: EffectKind, s: &Signals, current: &Cv) -> Option<Effect> {
+fn tune(model: &Model, kind: EffectKind, s: &Signals, current: &Cv) -> Option<Tuned> {
     if kind == EffectKind::ForceSensorLag {
         return tune_force_sensor(model, s, current);
     }
@@ -976,20 +985,19 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals, current: &Cv) -> Option<Ef
         // passed through the model's side, tuned like a torque lag, against the slope column;
         // the held-out error chooses.
         let slope = Effect::new(kind, 0.0);
-        let slope_mse = model
-            .with(slope)
-            .and_then(|m| cross_validate(&m, s))
-            .map_or(f64::INFINITY, |c| c.mse);
+        let slope_cv = model.with(slope).and_then(|m| cross_validate(&m, s));
         let best = [
             LagForm::FirstOrderOnModelSide,
             LagForm::FirstOrderOnModelSideStepsAtSamples,
         ]
         .into_iter()
-        .filter_map(|form| tune_param(model, kind, s, form).map(|(param, mse)| (form, param, mse)))
-        .min_by(|a, b| a.2.total_cmp(&b.2));
+        .filter_map(|form| tune_param(model, kind, s, form).map(|(param, cv)| (form, param, cv)))
+        .min_by(|a, b| mse_of(&a.2).total_cmp(&mse_of(&b.2)));
         return Some(match best {
-            Some((form, param, mse)) if mse < slope_mse => Effect { kind, param, form },
-            _ => slope,
+            Some((form, param, cv)) if mse_of(&cv) < mse_of(&slope_cv) => {
+                (Effect { kind, param, form }, cv)
+            }
+            _ => (slope, slope_cv),
         });
     }
     if kind == EffectKind::TorqueLag && s.has_force_steps() {
@@ -1002,23 +1010,24 @@ fn tune(model: &Model, kind: EffectKind, s: &Signals, current: &Cv) -> Option<Ef
         let anywhere = tune_lag(model, s, LagForm::FirstOrder);
         let at_samples = tune_lag(model, s, LagForm::FirstOrderStepsAtSamples);
         return match (anywhere, at_samples) {
-            (Some(a), Some(b)) => Some(if b.1 < a.1 { b.0 } else { a.0 }),
-            (a, b) => a.or(b).map(|x| x.0),
+            (Some(a), Some(b)) => Some(if mse_of(&b.1) < mse_of(&a.1) { b } else { a }),
+            (a, b) => a.or(b),
         };
     }
-    tune_param(model, kind, s, LagForm::FirstOrder).map(|(param, _)| Effect::new(kind, param))
+    tune_param(model, kind, s, LagForm::FirstOrder)
+        .map(|(param, cv)| (Effect::new(kind, param), cv))
 }
 
 /// A torque lag tuned in `form`, and its held-out error.
-fn tune_lag(model: &Model, s: &Signals, form: LagForm) -> Option<(Effect, f64)> {
-    let (param, mse) = tune_param(model, EffectKind::TorqueLag, s, form)?;
+fn tune_lag(model: &Model, s: &Signals, form: LagForm) -> Option<Tuned> {
+    let (param, cv) = tune_param(model, EffectKind::TorqueLag, s, form)?;
     Some((
         Effect {
             kind: EffectKind::TorqueLag,
             param,
             form,
         },
-        mse,
+        cv,
     ))
 }
 
@@ -1026,13 +1035,14 @@ fn tune_lag(model: &Model, s: &Signals, form: LagForm) -> Option<(Effect, f64)> 
 /// first-order lag is the Ḟ column (linear, fitted with its instrument); the delay, a shift of
 /// the force, is sought from half to twice that lag (at low frequency both are the sensor's
 /// phase lag, so they come out alike) by golden section on the held-out error.
-fn tune_force_sensor(model: &Model, s: &Signals, current: &Cv) -> Option<Effect> {
+fn tune_force_sensor(model: &Model, s: &Signals, current: &Cv) -> Option<Tuned> {
     let first_order = Effect::new(EffectKind::ForceSensorLag, 0.0);
     let Some(trial) = model.with(first_order) else {
-        return Some(first_order);
+        return Some((first_order, None));
     };
-    let (Some(cv), Some(f)) = (cross_validate(&trial, s), fit_on_all(&trial, s)) else {
-        return Some(first_order);
+    let cv = cross_validate(&trial, s);
+    let (Some(first_cv), Some(f)) = (cv.as_ref(), fit_on_all(&trial, s)) else {
+        return Some((first_order, cv));
     };
     // The delay is another shape of a lag the first-order form already finds (physical,
     // resolved, gaining enough in enough folds), never a way to find one it does not. Tried
@@ -1040,35 +1050,37 @@ fn tune_force_sensor(model: &Model, s: &Signals, current: &Cv) -> Option<Effect>
     // offset or a viscous friction on the sine (10 % held-out gain, none in the simulation)
     // that the first-order form and the truth put at zero.
     let (lag, stderr) = effect_value(&trial, trial.effects.len() - 1, &f, s);
-    let gain = 1.0 - cv.mse / current.mse;
+    let gain = 1.0 - first_cv.mse / current.mse;
     if physical(EffectKind::ForceSensorLag, lag, stderr).is_err()
         || gain < MIN_GAIN
-        || fold_wins(&cv, current) < MIN_FOLDS_BETTER
+        || fold_wins(first_cv, current) < MIN_FOLDS_BETTER
     {
-        return Some(first_order);
+        return Some((first_order, cv));
     }
     let delayed = |d: f64| Effect {
         kind: EffectKind::ForceSensorLag,
         param: d,
         form: LagForm::Delay,
     };
-    let score = |d: f64| {
-        model
-            .with(delayed(d))
-            .and_then(|m| cross_validate(&m, s))
-            .map_or(f64::INFINITY, |c| c.mse)
-    };
-    let d = golden(0.5 * lag, 2.0 * lag, score, 14);
-    Some(if score(d) < cv.mse {
-        delayed(d)
+    let cv_at = |d: f64| model.with(delayed(d)).and_then(|m| cross_validate(&m, s));
+    let d = golden(0.5 * lag, 2.0 * lag, |d| mse_of(&cv_at(d)), 14);
+    let delayed_cv = cv_at(d);
+    Some(if mse_of(&delayed_cv) < first_cv.mse {
+        (delayed(d), delayed_cv)
     } else {
-        first_order
+        (first_order, cv)
     })
 }
 
-/// The nonlinear parameter of `kind` and the held-out error it gives.
-fn tune_param(model: &Model, kind: EffectKind, s: &Signals, form: LagForm) -> Option<(f64, f64)> {
-    let score = |x: f64| {
+/// The nonlinear parameter of `kind` and the cross-validation it gives (none for an effect
+/// without one).
+fn tune_param(
+    model: &Model,
+    kind: EffectKind,
+    s: &Signals,
+    form: LagForm,
+) -> Option<(f64, Option<Cv>)> {
+    let cv_at = |x: f64| {
         model
             .with(Effect {
                 kind,
@@ -1076,8 +1088,8 @@ fn tune_param(model: &Model, kind: EffectKind, s: &Signals, form: LagForm) -> Op
                 form,
             })
             .and_then(|m| cross_validate(&m, s))
-            .map_or(f64::INFINITY, |c| c.mse)
     };
+    let score = |x: f64| mse_of(&cv_at(x));
     let grid: Vec<f64> = match kind {
         EffectKind::DragExponent => (0..=20).map(|k| 1.2 + 0.1 * k as f64).collect(),
         // 0.2 ms … 0.1 s (current loops and filters), within the half-second warm-up.
@@ -1103,8 +1115,8 @@ fn tune_param(model: &Model, kind: EffectKind, s: &Signals, form: LagForm) -> Op
                 .collect();
             return grid
                 .into_iter()
-                .map(|x| (x, score(x)))
-                .min_by(|a, b| a.1.total_cmp(&b.1));
+                .map(|x| (x, cv_at(x)))
+                .min_by(|a, b| mse_of(&a.1).total_cmp(&mse_of(&b.1)));
         }
         EffectKind::TorqueRipple => {
             // The harmonics of the rotor angle the current model's residual correlates with most
@@ -1124,18 +1136,18 @@ fn tune_param(model: &Model, kind: EffectKind, s: &Signals, form: LagForm) -> Op
             let best = by_strength
                 .iter()
                 .take(3)
-                .map(|&(k, _)| (k, score(k)))
-                .min_by(|a, b| a.1.total_cmp(&b.1))?;
+                .map(|&(k, _)| (k, cv_at(k)))
+                .min_by(|a, b| mse_of(&a.1).total_cmp(&mse_of(&b.1)))?;
             return Some(best);
         }
-        _ => return Some((0.0, f64::NAN)),
+        _ => return Some((0.0, None)),
     };
     let scores: Vec<f64> = grid.iter().map(|&x| score(x)).collect();
     let k = (0..grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
     let lo = grid[k.saturating_sub(1)];
     let hi = grid[(k + 1).min(grid.len() - 1)];
     let x = golden(lo, hi, score, 18);
-    Some((x, score(x)))
+    Some((x, cv_at(x)))
 }
 
 /// The physical parameter of an effect from a fit of the model that contains it (at position
@@ -1641,11 +1653,14 @@ fn try_candidate(
     sim_of: &(dyn Fn(&Model) -> Option<Vec<f64>> + Sync),
     measured: &[f64],
 ) -> Option<Tried> {
-    let param = tune(model, kind, s, current)?;
+    let (param, tuned_cv) = tune(model, kind, s, current)?;
     let Some(trial) = model.with(param) else {
         return Some(Tried::TooWide(kind));
     };
-    let cv = cross_validate(&trial, s)?;
+    let cv = match tuned_cv {
+        Some(cv) => cv,
+        None => cross_validate(&trial, s)?,
+    };
     let gain = 1.0 - cv.mse / current.mse;
     let wins = fold_wins(&cv, current);
     let all = fit_on_all(&trial, s);
