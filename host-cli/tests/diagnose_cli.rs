@@ -3,50 +3,34 @@
 
 mod common;
 
-use common::propid;
+use common::{propid, propid_ok};
 
 #[test]
 fn sim_then_diagnose_finds_a_hidden_torque_lag() {
     let dir = tempfile::tempdir().unwrap();
     let tsv = dir.path().join("stand.tsv");
-    let out = propid(
-        &[
-            "sim",
-            "--pattern",
-            "chirp",
-            "--duration",
-            "30",
-            "--torque-lag",
-            "0.012",
-            "--seed",
-            "3",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    propid_ok(&[
+        "sim",
+        "--pattern",
+        "chirp",
+        "--duration",
+        "30",
+        "--torque-lag",
+        "0.012",
+        "--seed",
+        "3",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
     let plot = dir.path().join("diag.svg");
-    let out = propid(
-        &[
-            "diagnose",
-            tsv.to_str().unwrap(),
-            "--format",
-            "json",
-            "--plot",
-            plot.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&[
+        "diagnose",
+        tsv.to_str().unwrap(),
+        "--format",
+        "json",
+        "--plot",
+        plot.to_str().unwrap(),
+    ]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     for key in ["base", "effects", "simulation_rms", "unexplained"] {
         assert!(r.get(key).is_some(), "missing `{key}`");
@@ -88,12 +72,7 @@ fn clean_data_says_nothing_is_wrong() {
         None,
     );
     assert!(out.status.success());
-    let out = propid(&["diagnose", tsv.to_str().unwrap()], None);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&["diagnose", tsv.to_str().unwrap()]);
     assert!(String::from_utf8(out.stdout)
         .unwrap()
         .contains("Nothing is wrong"));
@@ -221,36 +200,20 @@ fn import_then_diagnose_a_real_log() {
     let dir = tempfile::tempdir().unwrap();
     let tsv = dir.path().join("f40.tsv");
     let log = common::repo().join("tests/data/esc_test_alspitz/autoquad/f40_steps_5-2.csv");
-    let out = propid(
-        &[
-            "import",
-            "autoquad",
-            log.to_str().unwrap(),
-            "--kv",
-            "1600",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&[
+        "import",
+        "autoquad",
+        log.to_str().unwrap(),
+        "--kv",
+        "1600",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("Kt = 60/(2π·kv)"),
         "the importer states its assumption"
     );
-    let out = propid(
-        &["diagnose", tsv.to_str().unwrap(), "--format", "json"],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&["diagnose", tsv.to_str().unwrap(), "--format", "json"]);
     let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(r["effects"]
         .as_array()

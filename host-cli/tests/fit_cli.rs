@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{propid, yaml_value};
+use common::{propid, propid_ok, yaml_value};
 
 /// A clean synthetic file: J = 0.5, c2 = 0.02 driven by a sinusoidal torque (exact samples).
 fn synthetic(rows: usize, with_position: bool) -> String {
@@ -32,12 +32,7 @@ fn fits_from_file_and_stdin_in_yaml_and_json() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("a.tsv");
     std::fs::write(&path, synthetic(3000, true)).unwrap();
-    let out = propid(&["fit", path.to_str().unwrap(), "--diameter", "0.2"], None);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&["fit", path.to_str().unwrap(), "--diameter", "0.2"]);
     let yaml = String::from_utf8(out.stdout).unwrap();
     assert!(
         (yaml_value(&yaml, "mass") / 0.5 - 1.0).abs() < 1e-9,
@@ -105,22 +100,14 @@ fn reported_standard_errors_match_the_scatter_of_repeated_fits() {
         }
         let path = dir.path().join(format!("n{k}.tsv"));
         std::fs::write(&path, s).unwrap();
-        let out = propid(
-            &[
-                "fit",
-                path.to_str().unwrap(),
-                "--c1-max",
-                "1",
-                "--format",
-                "json",
-            ],
-            None,
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = propid_ok(&[
+            "fit",
+            path.to_str().unwrap(),
+            "--c1-max",
+            "1",
+            "--format",
+            "json",
+        ]);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         js.push(v["mass"].as_f64().unwrap());
         c2s.push(v["c2"].as_f64().unwrap());
@@ -153,20 +140,12 @@ fn writes_a_plot() {
     let path = dir.path().join("a.tsv");
     std::fs::write(&path, synthetic(2000, false)).unwrap();
     let svg = dir.path().join("fit.svg");
-    let out = propid(
-        &[
-            "fit",
-            path.to_str().unwrap(),
-            "--plot",
-            svg.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    propid_ok(&[
+        "fit",
+        path.to_str().unwrap(),
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.contains("measured") && text.contains("force"));
 }

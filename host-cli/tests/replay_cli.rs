@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{propid, repo};
+use common::{propid, propid_ok, repo};
 use propid_core::dsdl::{DataType, DoF3rdTs};
 use serde_json::Value;
 
@@ -32,20 +32,12 @@ fn replays_the_vector_frames() {
         }
         let path = dir.path().join(format!("case{k}.log"));
         std::fs::write(&path, &log).unwrap();
-        let out = propid(
-            &[
-                "replay",
-                path.to_str().unwrap(),
-                "--feedback-id",
-                &subject.to_string(),
-            ],
-            None,
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let out = propid_ok(&[
+            "replay",
+            path.to_str().unwrap(),
+            "--feedback-id",
+            &subject.to_string(),
+        ]);
         let text = String::from_utf8(out.stdout).unwrap();
         let rows: Vec<Vec<f64>> = text
             .lines()

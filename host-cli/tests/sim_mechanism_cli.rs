@@ -10,36 +10,28 @@ use common::{diagnose_json, propid, propid_ok, yaml_value};
 fn mechanism_stand_writes_a_tsv_that_fit_reads() {
     let dir = tempfile::tempdir().unwrap();
     let tsv = dir.path().join("mech.tsv");
-    let out = propid(
-        &[
-            "sim",
-            "--stand",
-            "mechanism",
-            "--pattern",
-            "chirp",
-            "--duration",
-            "20",
-            "--rate",
-            "1000",
-            "--noise-force",
-            "0",
-            "--noise-velocity",
-            "0",
-            "--noise-acceleration",
-            "0",
-            "--jitter",
-            "0",
-            "--write-setpoint",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    propid_ok(&[
+        "sim",
+        "--stand",
+        "mechanism",
+        "--pattern",
+        "chirp",
+        "--duration",
+        "20",
+        "--rate",
+        "1000",
+        "--noise-force",
+        "0",
+        "--noise-velocity",
+        "0",
+        "--noise-acceleration",
+        "0",
+        "--jitter",
+        "0",
+        "--write-setpoint",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
     let text = std::fs::read_to_string(&tsv).unwrap();
     let mut lines = text.lines();
     assert_eq!(
@@ -48,12 +40,7 @@ fn mechanism_stand_writes_a_tsv_that_fit_reads() {
     );
     assert_eq!(lines.count(), 20_001);
 
-    let out = propid(&["fit", tsv.to_str().unwrap()], None);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = propid_ok(&["fit", tsv.to_str().unwrap()]);
     let yaml = String::from_utf8(out.stdout).unwrap();
     // The clean mechanism stand obeys the seed's equation exactly: J = 2e-5, c2 = 1.5e-8.
     assert!(
@@ -74,35 +61,27 @@ fn mechanism_flags_reach_the_stand() {
     let dir = tempfile::tempdir().unwrap();
     let fit_mass = |report: &str| {
         let tsv = dir.path().join(format!("{report}.tsv"));
-        let out = propid(
-            &[
-                "sim",
-                "--stand",
-                "mechanism",
-                "--duration",
-                "20",
-                "--pattern",
-                "chirp",
-                "--noise-force",
-                "0",
-                "--noise-velocity",
-                "0",
-                "--noise-acceleration",
-                "0",
-                "--current-loop-bandwidth",
-                "100",
-                "--report",
-                report,
-                "-o",
-                tsv.to_str().unwrap(),
-            ],
-            None,
-        );
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        propid_ok(&[
+            "sim",
+            "--stand",
+            "mechanism",
+            "--duration",
+            "20",
+            "--pattern",
+            "chirp",
+            "--noise-force",
+            "0",
+            "--noise-velocity",
+            "0",
+            "--noise-acceleration",
+            "0",
+            "--current-loop-bandwidth",
+            "100",
+            "--report",
+            report,
+            "-o",
+            tsv.to_str().unwrap(),
+        ]);
         let out = propid(&["fit", tsv.to_str().unwrap()], None);
         yaml_value(&String::from_utf8(out.stdout).unwrap(), "mass")
     };
