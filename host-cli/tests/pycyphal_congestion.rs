@@ -368,9 +368,17 @@ fn standby_last(peer: &serde_json::Value) -> f64 {
         .take_while(|sp| sp[0].as_f64() == Some(0.0))
         .count();
     let trailing_standby = readiness.iter().rev().take_while(|&&r| r == 2).count();
+    let tail = |key: &str| -> Vec<serde_json::Value> {
+        let v = peer[key].as_array().cloned().unwrap_or_default();
+        v[v.len().saturating_sub(8)..].to_vec()
+    };
     assert!(
         trailing_zeros >= 4,
-        "{trailing_zeros} zero setpoints at the end"
+        "{trailing_zeros} zero setpoints at the end; the peer's last setpoints {:?} at {:?}, readiness {:?} at {:?}",
+        tail("setpoints"),
+        tail("setpoints_t"),
+        tail("readiness"),
+        tail("readiness_t")
     );
     assert!(
         trailing_standby >= 4,
