@@ -475,7 +475,7 @@ fn draws_that_were_wrong_are_right() {
         (
             Hidden::AccelerationFilter,
             26,
-            "a 1.8e-4 N·m offset and a viscous term",
+            "a 1.2e-4 N·m offset, ambiguous with its twin",
         ),
         // Braking at 100 Hz on the chirp: 12–13 % short, then a second-round ambiguity.
         (Hidden::Braking, 3, "chirp: braking 13 % short"),

@@ -1966,17 +1966,19 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
                 .and_then(|m| cross_validate(&m, s))
                 .map_or(0.0, |cv| 1.0 - cv.mse / w.1.mse)
         };
+        // A rival of the other family: a lag against a torque that is not a lag.
+        let other_family = |p: &&(Model, Cv, f64, usize, f64)| is_lag(p.3) != is_lag(passing[0].3);
         let rivals: Vec<&(Model, Cv, f64, usize, f64)> = passing
             .iter()
             .skip(1)
             .filter(|p| {
+                // The held-out simulation prefers the rival, or cannot tell the two apart.
+                let simulation_backs = p.4 > passing[0].4 || simulation_tie(p.4, passing[0].4);
                 let close = p.2 >= (1.0 - AMBIGUOUS) * passing[0].2
-                    && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER
-                        || p.4 > passing[0].4
-                        || simulation_tie(p.4, passing[0].4));
-                let across = is_lag(p.3) != is_lag(passing[0].3)
+                    && (fold_wins(&passing[0].1, &p.1) < MIN_FOLDS_BETTER || simulation_backs);
+                let across = other_family(p)
                     && p.2 >= (1.0 - AMBIGUOUS_ACROSS) * passing[0].2
-                    && (p.4 > passing[0].4 || simulation_tie(p.4, passing[0].4))
+                    && simulation_backs
                     && rival_adds(&passing[0], &p.0) < MIN_GAIN;
                 !(is_lag(p.3) && is_lag(passing[0].3)) && (close || across)
             })
@@ -1993,10 +1995,9 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
         // would hide that the cause may not be a torque at all, and advise a run that cannot
         // tell.
         let twin = |p: &&(Model, Cv, f64, usize, f64)| p.1.mse == passing[0].1.mse;
-        let across = |p: &&(Model, Cv, f64, usize, f64)| is_lag(p.3) != is_lag(passing[0].3);
         let rival = rivals
             .iter()
-            .find(|p| !twin(p) && across(p))
+            .find(|p| !twin(p) && other_family(p))
             .or_else(|| rivals.iter().find(|p| !twin(p)))
             .or_else(|| rivals.first())
             .copied();
