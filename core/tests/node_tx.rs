@@ -51,6 +51,12 @@ enum Seen {
 
 /// Moves up to `budget` frames from `from` to `to` at `now`; returns what `to` made of them.
 fn carry(from: &mut TestNode, to: &mut TestNode, now: Instant, budget: usize) -> Vec<Seen> {
+    let frames = send(from, now, budget);
+    deliver(to, now, &frames)
+}
+
+/// Up to `budget` frames `from` sends at `now`.
+fn send(from: &mut TestNode, now: Instant, budget: usize) -> Vec<Frame> {
     let mut frames: Vec<Frame> = Vec::new();
     while frames.len() < budget {
         match from.poll_transmit(now) {
@@ -58,8 +64,13 @@ fn carry(from: &mut TestNode, to: &mut TestNode, now: Instant, budget: usize) ->
             None => break,
         }
     }
+    frames
+}
+
+/// What `to` makes of `frames` at `now`.
+fn deliver(to: &mut TestNode, now: Instant, frames: &[Frame]) -> Vec<Seen> {
     let mut seen = Vec::new();
-    for f in &frames {
+    for f in frames {
         if let Some(Event::Message {
             subject_id,
             payload,
@@ -265,4 +276,49 @@ fn a_full_queue_is_a_counted_refusal() {
     assert_eq!((first.id() >> 8) & 0x1FFF, 100);
     assert_eq!(driver.stats().heartbeats, 1);
     assert_eq!(driver.transmit_queue_len(), 30);
+}
+
+/// The transfer-ID in a frame's tail byte.
+fn transfer_id(f: &Frame) -> u8 {
+    f.data().last().unwrap() & 0x1F
+}
+
+#[test]
+fn transfers_that_never_left_take_no_transfer_id() {
+    let (mut driver, mut drive) = pair();
+    publish_setpoint(&mut driver, ms(0), 1.0).unwrap();
+    let first = send(&mut driver, ms(0), usize::MAX);
+    assert!(deliver(&mut drive, ms(0), &first).contains(&Seen::Setpoint(1.0)));
+    let setpoint_ids = |frames: &[Frame]| -> Vec<u8> {
+        frames
+            .iter()
+            .filter(|f| (f.id() >> 8) & 0x1FFF == u32::from(SETPOINT.get()))
+            .map(transfer_id)
+            .collect()
+    };
+    assert_eq!(setpoint_ids(&first), [0; 10]);
+
+    // 32 setpoints while the link takes nothing: each supersedes the one before. Numbered as
+    // published, the last would carry 32 mod 32 = 0, the ID of the one that crossed, and the
+    // receiver would discard it as a repeat (as PyCyphal did after a stalled bus).
+    for k in 0..32u64 {
+        publish_setpoint(&mut driver, ms(1 + k), 2.0 + k as f32).unwrap();
+    }
+    assert_eq!(driver.stats().tx.superseded, 31);
+    let next = send(&mut driver, ms(33), usize::MAX);
+    assert_eq!(setpoint_ids(&next), [1; 10]);
+    assert_eq!(deliver(&mut drive, ms(33), &next), [Seen::Setpoint(33.0)]);
+
+    // A transfer cut short by a stop: 3 of its 10 frames leave, the rest is purged. The zero
+    // setpoint after it is next in number; the receiver abandons the cut one and takes it.
+    publish_setpoint(&mut driver, ms(40), 5.0).unwrap();
+    let cut = send(&mut driver, ms(40), 3);
+    assert_eq!(setpoint_ids(&cut), [2; 3]);
+    assert_eq!(deliver(&mut drive, ms(40), &cut), []);
+    assert_eq!(driver.purge_transmit(), 7);
+    publish_setpoint(&mut driver, ms(41), 0.0).unwrap();
+    let stop = send(&mut driver, ms(41), usize::MAX);
+    assert_eq!(setpoint_ids(&stop), [3; 10]);
+    assert_eq!(deliver(&mut drive, ms(41), &stop), [Seen::Setpoint(0.0)]);
+    assert_eq!(drive.stats().rx.rejected_total(), 0);
 }

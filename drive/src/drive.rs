@@ -598,8 +598,9 @@ impl Drive {
         };
         let reason = s.reason.clone();
         // Whatever is still queued will never be sent.
-        if let Some(_f) = self.held.take() {
+        if let Some(f) = self.held.take() {
             self.held_dropped += 1;
+            self.node.unsent(&f);
         }
         self.held_dropped += self.node.transmit_queue_len() as u64;
         self.last_now = self.last_now.max(now);
@@ -621,10 +622,13 @@ impl Drive {
         if self.stopping.is_some() {
             return;
         }
-        self.node.purge_transmit();
-        if self.held.take().is_some() {
+        // A held frame never reached the bus: its transfer-ID goes back to its subject, so
+        // STANDBY and the zero setpoint follow on from the last transfers a receiver took.
+        if let Some(f) = self.held.take() {
             self.held_dropped += 1;
+            self.node.unsent(&f);
         }
+        self.node.purge_transmit();
         self.phase = Phase::Stopping;
         self.events.push_back(DriveEvent::Stopping(reason.clone()));
         self.stopping = Some(Stopping {
@@ -720,8 +724,10 @@ impl Drive {
         }
         let frame = match self.held.take() {
             Some(f) if now <= self.held_deadline => Some(f),
-            Some(_) => {
+            Some(stale) => {
+                // Refused until stale: it never reached the bus, and gives its transfer-ID back.
                 self.held_dropped += 1;
+                self.node.unsent(&stale);
                 self.node.poll_transmit(now)
             }
             None => self.node.poll_transmit(now),

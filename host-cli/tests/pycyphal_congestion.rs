@@ -336,9 +336,10 @@ fn whole_rows(tsv: &str) -> Vec<Vec<f64>> {
 }
 
 /// PyCyphal decoded nothing torn: every setpoint is 31 equal values, zero or in the pattern's
-/// range; its last readiness is STANDBY and its last setpoint zero. Returns the wall time at
+/// range; its last readiness is STANDBY and its last setpoint zero, and it took every STANDBY and
+/// zero setpoint the summary says were sent, discarding none as a repeat. Returns the wall time at
 /// which it decoded the first STANDBY.
-fn standby_last(peer: &serde_json::Value) -> f64 {
+fn standby_last(peer: &serde_json::Value, summary: &str) -> f64 {
     let readiness: Vec<u64> = peer["readiness"]
         .as_array()
         .unwrap()
@@ -359,31 +360,52 @@ fn standby_last(peer: &serde_json::Value) -> f64 {
         0.0,
         "zero setpoint last"
     );
-    // The five repeats leave one after another with consecutive transfer-IDs, so PyCyphal takes
-    // at least four of each (it discards at most the first, should its transfer-ID equal the last
-    // one it took before the gap).
+    // The repeats leave one after another, and a transfer takes its transfer-ID only as it
+    // leaves, so the IDs PyCyphal sees follow on from the last transfer that crossed, however
+    // many were superseded or purged meanwhile: it takes every one. (When IDs were given at
+    // publication, a stop's first zero setpoint could carry the ID of the last setpoint that
+    // crossed before the stall, 32 or 64 IDs earlier, and PyCyphal discarded it as a repeat.)
+    let sent_counts = summary
+        .split_once("sent (")
+        .and_then(|(_, rest)| rest.split_once(" times)"))
+        .map(|(counts, _)| counts)
+        .unwrap_or_else(|| panic!("no `sent (N and M times)` in {summary}"));
+    let (standby_sent, zeros_sent) = (
+        count(&format!("STANDBY {sent_counts}"), "STANDBY "),
+        count(sent_counts, " and "),
+    );
     let trailing_zeros = setpoints
         .iter()
         .rev()
         .take_while(|sp| sp[0].as_f64() == Some(0.0))
-        .count();
-    let trailing_standby = readiness.iter().rev().take_while(|&&r| r == 2).count();
+        .count() as u64;
+    let trailing_standby = readiness.iter().rev().take_while(|&&r| r == 2).count() as u64;
     let tail = |key: &str| -> Vec<serde_json::Value> {
         let v = peer[key].as_array().cloned().unwrap_or_default();
         v[v.len().saturating_sub(8)..].to_vec()
     };
-    assert!(
-        trailing_zeros >= 4,
-        "{trailing_zeros} zero setpoints at the end; the peer's last setpoints {:?} at {:?}, readiness {:?} at {:?}",
-        tail("setpoints"),
+    let last = format!(
+        "the peer's last setpoints {:?} at {:?} (transfer-IDs {:?}), readiness {:?} at {:?} (transfer-IDs {:?}); reassembly errors {}",
+        tail("setpoints").iter().map(|v| v[0].clone()).collect::<Vec<_>>(),
         tail("setpoints_t"),
+        tail("setpoints_tid"),
         tail("readiness"),
-        tail("readiness_t")
+        tail("readiness_t"),
+        tail("readiness_tid"),
+        peer["reassembly_errors"]
     );
-    assert!(
-        trailing_standby >= 4,
-        "{trailing_standby} STANDBY at the end"
+    assert_eq!(
+        (trailing_standby, trailing_zeros),
+        (standby_sent, zeros_sent),
+        "STANDBY and zero setpoints at the end, against those sent ({summary}); {last}"
     );
+    for sub in ["setpoints", "readiness"] {
+        assert_eq!(
+            peer["reassembly_errors"][sub]["UNEXPECTED_TRANSFER_ID"].as_u64(),
+            Some(0),
+            "PyCyphal discarded {sub} frames for their transfer-ID; {last}"
+        );
+    }
     let first_standby = readiness.iter().position(|&r| r == 2).unwrap();
     assert!(
         readiness[first_standby..].iter().all(|&r| r == 2),
@@ -463,7 +485,7 @@ fn a_congested_bus_loses_setpoints_not_the_run_and_standby_arrives_last() {
         "no progress while the bus was stopped: {err}"
     );
 
-    let standby_at = standby_last(peer);
+    let standby_at = standby_last(peer, summary);
     let latency = standby_at - run.stop_time();
     eprintln!("STANDBY decoded by PyCyphal {latency:.3} s after the stop began");
     assert!(
@@ -496,7 +518,7 @@ fn sigint_while_the_bus_is_stopped_still_ends_with_standby_at_the_peer() {
         "the stop began while the bus was stopped"
     );
     whole_rows(&run.tsv);
-    let standby_at = standby_last(run.peer.as_ref().unwrap());
+    let standby_at = standby_last(run.peer.as_ref().unwrap(), summary);
     let latency = standby_at - stop;
     eprintln!(
         "SIGINT {:.3} s into the stall: STANDBY decoded by PyCyphal {latency:.3} s after the stop began ({:.3} s after the bus resumed)",

@@ -5,7 +5,9 @@ of a pseudo-terminal pair; `propid drive` on the other.
 PyCyphal (node 20) publishes DoF3rdTs on subject 110 at 100 Hz with known values (velocity = k,
 force = k/1000, timestamp = k·10 ms) and a Heartbeat; it subscribes to Readiness (subject 10) and
 Vector31 (subject 24) and prints what it received as JSON at the end (with the wall time, time.time(),
-of each reception), with the values it sent (and the wall time of each publication).
+of each reception, and its transfer-ID), with the values it sent (and the wall time of each
+publication), and the reassembly errors PyCyphal counted on the two subscriptions (a transfer
+discarded as a repeat counts one UNEXPECTED_TRANSFER_ID per frame).
 
 usage: interop.py COMPILED_DIR IFACE SECONDS
 """
@@ -35,14 +37,17 @@ async def main() -> None:
     sub_ready = pres.make_subscriber(zubax.service.Readiness_1, 10)
     sub_sp = pres.make_subscriber(zubax.primitive.real16.Vector31_1, 24)
     readiness, setpoints, readiness_t, setpoints_t = [], [], [], []
+    readiness_tid, setpoints_tid = [], []
 
-    async def on_ready(msg, _meta):
+    async def on_ready(msg, meta):
         readiness.append(int(msg.value))
         readiness_t.append(time.time())
+        readiness_tid.append(meta.transfer_id)
 
-    async def on_sp(msg, _meta):
+    async def on_sp(msg, meta):
         setpoints.append([float(x) for x in msg.value])
         setpoints_t.append(time.time())
+        setpoints_tid.append(meta.transfer_id)
 
     sub_ready.receive_in_background(on_ready)
     sub_sp.receive_in_background(on_sp)
@@ -71,6 +76,12 @@ async def main() -> None:
             await pub_hb.publish(uavcan.node.Heartbeat_1(uptime=k // 100))
         await asyncio.sleep(0.01)
     await asyncio.sleep(1.0)
+
+    def reassembly_errors(sub):
+        counters = sub.sample_statistics().transport_session.reception_error_counters
+        return {k.name: v for k, v in counters.items()}
+
+    errors = {"setpoints": reassembly_errors(sub_sp), "readiness": reassembly_errors(sub_ready)}
     pres.close()
     print(
         json.dumps(
@@ -80,6 +91,9 @@ async def main() -> None:
                 "setpoints": setpoints,
                 "readiness_t": readiness_t,
                 "setpoints_t": setpoints_t,
+                "readiness_tid": readiness_tid,
+                "setpoints_tid": setpoints_tid,
+                "reassembly_errors": errors,
             }
         )
     )

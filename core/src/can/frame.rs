@@ -42,6 +42,15 @@ impl Frame {
         &self.data[..usize::from(self.len)]
     }
 
+    /// Rewrites the transfer-ID in the Cyphal tail byte (its low five bits; `tid` is taken modulo
+    /// 32). The transfer CRC covers the payload only, so a multi-frame transfer stays valid when
+    /// every one of its frames is given the same new ID. Does nothing to a frame without data.
+    pub(crate) fn set_transfer_id(&mut self, tid: u8) {
+        if let Some(tail) = self.data[..usize::from(self.len)].last_mut() {
+            *tail = (*tail & !0x1F) | (tid & 0x1F);
+        }
+    }
+
     /// True if the frame does not fit Classic CAN (more than 8 data bytes).
     pub fn is_fd(&self) -> bool {
         self.len > 8

@@ -36,8 +36,8 @@ pub use status::{Health, Mode};
 pub use tx_queue::{TxQueue, TxStats};
 
 use crate::can::{
-    Frame, Mtu, NodeId, Port, Priority, Reassembler, RxStats, ServiceId, SubjectId, Subscription,
-    TransferHeader, TransferKind, TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
+    CanId, Frame, Mtu, NodeId, Port, Priority, Reassembler, RxStats, ServiceId, SubjectId,
+    Subscription, TailByte, TransferHeader, TransferKind, TxError, DEFAULT_TRANSFER_ID_TIMEOUT,
 };
 use crate::dsdl::{DataType, GetInfoResponse, Heartbeat, Version};
 
@@ -269,6 +269,20 @@ impl<
         Ok(0)
     }
 
+    /// The transfer-ID the next message on `subject_id` will leave with, making room for its
+    /// counter if it has none yet. The ID is given for good only as the transfer's first frame
+    /// leaves ([`TxQueue::pop_assigning`]): one that never leaves takes none.
+    fn provisional_transfer_id(&mut self, subject_id: SubjectId) -> Result<u8, TxError> {
+        let key = (false, subject_id.get());
+        if let Some(t) = self.transfer_ids.get(&key) {
+            return Ok(*t);
+        }
+        self.transfer_ids
+            .insert(key, 0)
+            .map_err(|_| TxError::TooManyPorts)?;
+        Ok(0)
+    }
+
     fn enqueue(
         &mut self,
         header: &TransferHeader,
@@ -284,6 +298,8 @@ impl<
     /// Publishes `payload` on `subject_id`; its frames are dropped if not sent within `timeout`.
     /// It supersedes a queued transfer on the same subject none of whose frames has left yet.
     /// A full queue refuses it with [`TxError::QueueFull`] (counted in [`TxStats::refused`]).
+    /// Its transfer-ID is the subject's next as its first frame leaves, so the transfers a
+    /// receiver sees are numbered without gaps whatever was superseded, expired or purged.
     pub fn publish(
         &mut self,
         now: Instant,
@@ -292,7 +308,7 @@ impl<
         payload: &[u8],
         timeout: Duration,
     ) -> Result<(), TxError> {
-        let transfer_id = self.next_transfer_id(false, subject_id.get())?;
+        let transfer_id = self.provisional_transfer_id(subject_id)?;
         let header = TransferHeader {
             priority,
             kind: TransferKind::Message { subject_id },
@@ -446,7 +462,6 @@ impl<
                 source: Some(self.config.node_id),
                 transfer_id: self.heartbeat_tid,
             };
-            self.heartbeat_tid = (self.heartbeat_tid + 1) % 32;
             if self
                 .enqueue(&header, &buf, now, now + SERVICE_DEADLINE)
                 .is_ok()
@@ -460,7 +475,53 @@ impl<
             }
         }
         self.poll_port_list(now);
-        self.queue.pop(now)
+        let (counters, heartbeat_tid) = (&mut self.transfer_ids, &mut self.heartbeat_tid);
+        self.queue.pop_assigning(now, &mut |subject| {
+            let counter = if subject == HEARTBEAT_SUBJECT {
+                Some(&mut *heartbeat_tid)
+            } else {
+                counters.get_mut(&(false, subject.get()))
+            };
+            // Every queued message's subject has a counter: `publish` made room for it.
+            counter.map_or(0, |t| {
+                let tid = *t;
+                *t = (tid + 1) % 32;
+                tid
+            })
+        })
+    }
+
+    /// Takes back a frame [`Node::poll_transmit`] gave out that never reached the bus (the link
+    /// refused it until it went stale). If it began a message transfer, the rest of that
+    /// transfer is dropped (counted as expired) and its transfer-ID given back, so the next
+    /// transfer on the subject takes it: the IDs a receiver sees stay without gaps however long
+    /// the link refused. Any other frame is only forgotten.
+    pub fn unsent(&mut self, frame: &Frame) {
+        let Some(&tail) = frame.data().last() else {
+            return;
+        };
+        let tail = TailByte::parse(tail);
+        let Some(CanId {
+            kind: TransferKind::Message { subject_id },
+            ..
+        }) = CanId::parse(frame.id())
+        else {
+            return;
+        };
+        if !tail.start {
+            return;
+        }
+        if !tail.end {
+            self.queue.drop_in_progress();
+        }
+        let counter = if subject_id == HEARTBEAT_SUBJECT {
+            Some(&mut self.heartbeat_tid)
+        } else {
+            self.transfer_ids.get_mut(&(false, subject_id.get()))
+        };
+        if let Some(t) = counter.filter(|t| **t == (tail.transfer_id + 1) % 32) {
+            *t = tail.transfer_id;
+        }
     }
 
     /// When to call [`Node::poll_transmit`] next: the latest time given if frames are waiting

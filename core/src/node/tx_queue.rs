@@ -20,6 +20,14 @@
 //!   and counted, never sent (so the rest of a transfer whose deadline passed is dropped too).
 //! - **Supersede.** A new message on a subject replaces a queued transfer of that subject none of
 //!   whose frames has left yet: a setpoint that waited is stale once a newer one exists.
+//! - **Transfer-IDs of messages are taken as they leave.** [`TxQueue::pop_assigning`] gives a
+//!   message transfer its ID when its first frame leaves (and the same ID to the rest of it), so a
+//!   transfer that never left (superseded, expired, purged) leaves no gap in the sequence a
+//!   receiver sees. A gap would be harmless but for one case: receivers deduplicate by transfer-ID
+//!   (PyCyphal, libcanard: a start of transfer whose ID equals the last one taken, or the one
+//!   after a transfer cut short, is a repeat), and a gap of a multiple of 32, or one less, lands
+//!   exactly there. After a congested second a stop's zero setpoint was discarded so by PyCyphal
+//!   (`host-cli/tests/pycyphal_congestion.rs`).
 //! - **A full queue refuses, never blocks.** When a transfer does not fit, expired frames are
 //!   dropped first, then queued transfers of strictly lower priority are displaced (newest first);
 //!   if that is still not enough room the new transfer is refused and counted, and the queue is
@@ -74,6 +82,8 @@ pub struct TxQueue<const N: usize> {
     /// priority level, non-increasing, newest first within a level.
     entries: heapless::Vec<Entry, N>,
     pinned: usize,
+    /// The transfer-ID given to the message transfer in progress by [`TxQueue::pop_assigning`].
+    pinned_transfer_id: Option<u8>,
     stats: TxStats,
 }
 
@@ -89,6 +99,7 @@ impl<const N: usize> TxQueue<N> {
         TxQueue {
             entries: heapless::Vec::new(),
             pinned: 0,
+            pinned_transfer_id: None,
             stats: TxStats {
                 sent: 0,
                 expired: 0,
@@ -139,6 +150,16 @@ impl<const N: usize> TxQueue<N> {
         self.entries.clear();
         self.pinned = 0;
         self.stats.purged += n as u64;
+        n
+    }
+
+    /// Drops the rest of the transfer in progress (counted as expired): its first frame, popped,
+    /// never reached the bus. Returns how many frames went.
+    pub fn drop_in_progress(&mut self) -> usize {
+        let n = self.pinned;
+        self.entries.truncate(self.entries.len() - n);
+        self.pinned = 0;
+        self.stats.expired += n as u64;
         n
     }
 
@@ -241,10 +262,32 @@ impl<const N: usize> TxQueue<N> {
         Ok(())
     }
 
-    /// The next frame to send, stamped `now`; frames whose deadline passed are dropped on the way.
+    /// The next frame to send, stamped `now`, with the transfer-ID it was pushed with; frames
+    /// whose deadline passed are dropped on the way.
     #[must_use]
     pub fn pop(&mut self, now: Instant) -> Option<Frame> {
+        self.pop_inner(now, None)
+    }
+
+    /// As [`TxQueue::pop`], but a message transfer is given its transfer-ID as its first frame
+    /// leaves, from `next_transfer_id(subject)` (called once per transfer that leaves); the rest
+    /// of the transfer carries the same ID. Service transfers keep the ID they were pushed with.
+    #[must_use]
+    pub fn pop_assigning(
+        &mut self,
+        now: Instant,
+        next_transfer_id: &mut dyn FnMut(SubjectId) -> u8,
+    ) -> Option<Frame> {
+        self.pop_inner(now, Some(next_transfer_id))
+    }
+
+    fn pop_inner(
+        &mut self,
+        now: Instant,
+        mut next_transfer_id: Option<&mut dyn FnMut(SubjectId) -> u8>,
+    ) -> Option<Frame> {
         while let Some(entry) = self.entries.pop() {
+            let first = self.pinned == 0;
             if self.pinned > 0 {
                 self.pinned -= 1;
             } else {
@@ -261,6 +304,15 @@ impl<const N: usize> TxQueue<N> {
             }
             let mut frame = entry.frame;
             frame.timestamp = now;
+            if first {
+                self.pinned_transfer_id = match (entry.subject, next_transfer_id.as_mut()) {
+                    (Some(subject), Some(next)) => Some(next(subject)),
+                    _ => None,
+                };
+            }
+            if let Some(tid) = self.pinned_transfer_id {
+                frame.set_transfer_id(tid);
+            }
             self.stats.sent += 1;
             return Some(frame);
         }
