@@ -11,7 +11,7 @@
 use propid_io::tsv::{Row, Sample};
 use propid_mechsim::scenarios::{Bench, Expect, Hidden, Scenario};
 use propid_mechsim::{pattern, MechConfig, Record};
-use propid_science::diagnose::{diagnose_rows, Options, Report, SeparatingRun, Verdict};
+use propid_science::diagnose::{diagnose_rows, NearMiss, Options, Report, SeparatingRun, Verdict};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -85,10 +85,16 @@ fn describe(r: &Report) -> String {
             None => format!("{}={:.4e}", e.name, e.value),
         })
         .collect();
+    let near: Vec<String> = r
+        .near_misses
+        .iter()
+        .map(|m| format!("{}={:.4e} ({:.2} %)", m.name, m.value, m.cv_gain_percent))
+        .collect();
     format!(
-        "{:?} [{}] ambiguous {:?}, J {:.4e}, c2 {:.4e}, sim {:.2} → {:.2}",
+        "{:?} [{}] near [{}] ambiguous {:?}, J {:.4e}, c2 {:.4e}, sim {:.2} → {:.2}",
         r.verdict,
         effects.join(", "),
+        near.join(", "),
         r.ambiguity.as_ref().map(|a| (a.between, a.values)),
         r.extended.mass,
         r.extended.c2,
@@ -109,6 +115,11 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
         Expect::Nothing | Expect::NotIdentifiable { .. } => {
             if r.verdict != Verdict::NothingWrong {
                 bad.push(format!("expected nothing, got {:?} {names:?}", r.verdict));
+            }
+            // Nor a hint of something: a near miss here would send the user on a needless run.
+            let near: Vec<&str> = r.near_misses.iter().map(|m| m.name).collect();
+            if !near.is_empty() {
+                bad.push(format!("expected nothing, got near misses {near:?}"));
             }
         }
         Expect::Effect(e) => {
@@ -188,6 +199,22 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
     bad
 }
 
+/// The expected effect among the near misses of a report that names nothing, at the right value
+/// (within the tolerance `judge` gives a named one).
+fn near_miss_of<'r>(s: &Scenario, r: &'r Report) -> Option<&'r NearMiss> {
+    let Expect::Effect(e) = s.expect else {
+        return None;
+    };
+    let tolerance = 0.10 + e.derivation_error;
+    (r.verdict == Verdict::NothingWrong)
+        .then(|| {
+            r.near_misses
+                .iter()
+                .find(|m| m.name == e.name && ((m.value - e.value) / e.value).abs() <= tolerance)
+        })
+        .flatten()
+}
+
 /// What is wrong with each of `hidden`, drawn in turn from the generator seeded `seed`, on each
 /// of `patterns`.
 fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
@@ -211,6 +238,14 @@ fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
             }) {
                 let next = Pattern::Advised(a.separating_run);
                 advised = format!(" → advised `{}`", a.separating_run.flags());
+                r = run(&s, next, sim_seed);
+                bad = judge(&s, next, &r);
+            } else if let Some(m) = near_miss_of(&s, &r).filter(|_| !bad.is_empty()) {
+                // Not named, below the threshold, but listed as a near miss at the right value
+                // with the run that would show it: a user would do that run, and then the
+                // effect must be named alone.
+                let next = Pattern::Advised(m.revealing_run);
+                advised = format!(" → near miss, then `{}`", m.revealing_run.flags());
                 r = run(&s, next, sim_seed);
                 bad = judge(&s, next, &r);
             }
@@ -314,11 +349,13 @@ fn mechanisms_on_steps_are_named_and_measured() {
     assert_right(&hidden, &[Pattern::Steps]);
 }
 
-/// The mechanisms diagnose still gets wrong (figures in docs/SCIENCE.md, "What propid still
-/// cannot find"); run with `-- --ignored` to see where each stands.
+/// Below the threshold: a fast velocity observer (60–80 Hz) on the sine, and a held load cell
+/// in 1 kHz rows on the sine, lag by 1–3.5 ms, which one 0.5 Hz sinusoid hardly shows (held-out
+/// gains of 0.8–2.9 %, under the 3 % threshold; docs/SCIENCE.md). Where nothing is named, the
+/// report must list the effect as a near miss at the right value with the run that shows it (a
+/// chirp), and that run must name it alone; on the chirp it is named directly.
 #[test]
-#[ignore = "known failures, see docs/SCIENCE.md: a fast velocity observer on the sine, a held load cell in 1 kHz rows on the sine"]
-fn mechanisms_diagnose_still_gets_wrong() {
+fn below_the_threshold_a_near_miss_points_to_the_run_that_names_it() {
     let mut failures: Vec<String> = DRAWS
         .iter()
         .flat_map(|&seed| {
@@ -335,6 +372,27 @@ fn mechanisms_diagnose_still_gets_wrong() {
             .flat_map(|&seed| check(&[Hidden::LoadCell], seed, &[Pattern::Sine])),
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+
+    // The route itself, on one draw where the sine names nothing (seed 1: a 69 Hz observer in
+    // 1 kHz rows): the near miss, its value, and its advice.
+    let mut rng = StdRng::seed_from_u64(1);
+    let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
+    let s = Hidden::VelocityObserver.draw(&bench(rate, Pattern::Sine), &mut rng);
+    let r = run(&s, Pattern::Sine, rng.random());
+    assert_eq!(r.verdict, Verdict::NothingWrong, "{}", describe(&r));
+    let m = near_miss_of(&s, &r).unwrap_or_else(|| panic!("no near miss: {}", describe(&r)));
+    assert_eq!(m.revealing_run.pattern, "chirp");
+    assert!(
+        m.cv_gain_percent >= 0.5 && m.cv_gain_percent < 3.0 && m.simulation_gain_percent > 0.0,
+        "{m:?}"
+    );
+    let text = propid_science::diagnose::to_text(&r, "observer.tsv");
+    assert!(
+        text.contains("Nothing is named")
+            && text.contains("torque_lag = ")
+            && !text.contains("Nothing is wrong"),
+        "{text}"
+    );
 }
 
 /// Every mechanism over several rng seeds (`PROPID_SWEEP=N`, default 4, from seed 1): how often

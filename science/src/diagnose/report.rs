@@ -58,8 +58,38 @@ pub fn to_text(r: &Report, source: &str) -> String {
         );
     }
     s += "\n4. Verdict\n";
-    if r.verdict == Verdict::NothingWrong {
+    if r.verdict == Verdict::NothingWrong && r.near_misses.is_empty() {
         s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
+    } else if r.verdict == Verdict::NothingWrong {
+        s += &format!(
+            "   Nothing is named: no candidate reaches the {:.0} % held-out threshold, and the residual has no\n   \
+             structure left. Close to it (consistent in every fold, the simulation agreeing; evidence, not a verdict):\n",
+            super::MIN_GAIN * 100.0
+        );
+    } else if !r.near_misses.is_empty() {
+        s += "   Close to being named as well (consistent in every fold, the simulation agreeing; evidence, not a verdict):\n";
+    }
+    for m in &r.near_misses {
+        let unit = if m.unit == "1" {
+            String::new()
+        } else {
+            format!(" {}", m.unit)
+        };
+        s += &format!(
+            "     {} = {:.4e}{unit}: held-out gain {:.2} %, simulated velocity {:+.1} %\n",
+            m.name, m.value, m.cv_gain_percent, m.simulation_gain_percent
+        );
+    }
+    // The runs that would show them, each once, with the near misses it is for.
+    let mut runs: Vec<(&str, Vec<&str>)> = Vec::new();
+    for m in &r.near_misses {
+        match runs.iter_mut().find(|(look, _)| *look == m.look_with) {
+            Some((_, names)) => names.push(m.name),
+            None => runs.push((&m.look_with, vec![m.name])),
+        }
+    }
+    for (look, names) in runs {
+        s += &format!("     To see {}: {look}.\n", names.join(", "));
     }
     if let Some(a) = &r.ambiguity {
         s += &format!(
