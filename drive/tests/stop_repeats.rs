@@ -12,11 +12,12 @@
 //! transfer now takes its ID as its first frame leaves (`propid_core::node::TxQueue`), and a
 //! frame the link refused until stale gives its ID back (`Node::unsent`).
 
+use std::ops::Range;
 use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::time::Instant;
-use propid_drive::drive::{Drive, DriveConfig, DriveEvent, STOP_REPEATS};
+use propid_drive::drive::{Drive, DriveConfig, DriveEvent, StopReport, STOP_REPEATS};
 use propid_drive::{Machine, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
@@ -29,8 +30,10 @@ fn transfers(frames: &[Frame]) -> Vec<(u32, u8)> {
         .collect()
 }
 
-#[test]
-fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
+/// A drive running the seed's sine on a virtual clock (1 ms steps), stopped by a signal at
+/// `stop_at` ms, behind a link that takes every frame except from `stall.start` to `stall.end`
+/// ms, when it refuses everything. Every frame the link took, and the stop report.
+fn run_behind_a_stalled_link(stop_at: u64, stall: Range<u64>) -> (Vec<Frame>, StopReport) {
     let excitation = Excitation {
         lo: 0.1,
         hi: 0.9,
@@ -46,7 +49,6 @@ fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
     let mut drive = Drive::new(cfg, Instant::ZERO);
     let ms = |n: u64| Instant::ZERO + Duration::from_millis(n);
     let mut sent = Vec::new();
-    let (stop_at, resume_at) = (100, 400);
     let mut t = 0;
     let mut report = None;
     while !drive.is_stopped() {
@@ -55,14 +57,11 @@ fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
             drive.handle_fault(now, StopReason::Signal);
         }
         while let Some(f) = drive.poll_transmit(now) {
-            // The link takes everything until the stop, then nothing for 300 ms, then all again.
-            if (stop_at..resume_at).contains(&t) {
+            if stall.contains(&t) {
                 drive.handle_blocked(now, f);
                 break;
             }
-            if t >= stop_at {
-                sent.push(f);
-            }
+            sent.push(f);
         }
         while let Some(e) = drive.poll_event() {
             if let DriveEvent::Stopped(r) = e {
@@ -72,7 +71,19 @@ fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
         t += 1;
         assert!(t < 5000, "the stop sequence ended");
     }
-    let after_stop = transfers(&sent);
+    (sent, report.expect("a stop report"))
+}
+
+#[test]
+fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
+    // The link takes everything until the stop, then nothing for 300 ms, then all again.
+    let stop_at = 100;
+    let (sent, report) = run_behind_a_stalled_link(stop_at, stop_at..400);
+    let after_stop: Vec<Frame> = sent
+        .into_iter()
+        .filter(|f| f.timestamp >= Instant::ZERO + Duration::from_millis(stop_at))
+        .collect();
+    let after_stop = transfers(&after_stop);
     let ids = |subject: u32| -> Vec<u8> {
         after_stop
             .iter()
@@ -91,7 +102,6 @@ fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
             assert_eq!(w[1], (w[0] + 1) % 32, "subject {subject}: {ids:?}");
         }
     }
-    let report = report.expect("a stop report");
     assert_eq!(report.standby_sent, STOP_REPEATS, "{report:?}");
     assert_eq!(report.zero_setpoints_sent, STOP_REPEATS, "{report:?}");
 }
@@ -103,45 +113,8 @@ fn stop_repeats_behind_a_stopped_link_leave_with_consecutive_transfer_ids() {
 /// took one time in 32, and be discarded as a repeat (PyCyphal did so behind a stalled bus).
 #[test]
 fn transfer_ids_run_on_across_a_stalled_link_so_no_stop_command_looks_like_a_repeat() {
-    let excitation = Excitation {
-        lo: 0.1,
-        hi: 0.9,
-        period: 2.0,
-        duration: 10.0,
-        init_duration: 0.0,
-        pattern: Pattern::Sine,
-    };
-    let cfg = DriveConfig {
-        deadman: 5.0,
-        ..DriveConfig::example(excitation)
-    };
-    let mut drive = Drive::new(cfg, Instant::ZERO);
-    let ms = |n: u64| Instant::ZERO + Duration::from_millis(n);
-    let mut sent = Vec::new();
-    let (stall_at, stop_at, resume_at) = (100, 250, 400);
-    let mut t = 0;
-    let mut report = None;
-    while !drive.is_stopped() {
-        let now = ms(t);
-        if t == stop_at {
-            drive.handle_fault(now, StopReason::Signal);
-        }
-        while let Some(f) = drive.poll_transmit(now) {
-            if (stall_at..resume_at).contains(&t) {
-                drive.handle_blocked(now, f);
-                break;
-            }
-            sent.push(f);
-        }
-        while let Some(e) = drive.poll_event() {
-            if let DriveEvent::Stopped(r) = e {
-                report = Some(r);
-            }
-        }
-        t += 1;
-        assert!(t < 5000, "the stop sequence ended");
-    }
-    let report = report.expect("a stop report");
+    // The link stops during the pattern; the stop begins while it is stopped; it resumes.
+    let (sent, report) = run_behind_a_stalled_link(250, 100..400);
     // Frames went stale in the drive's hand and setpoints were superseded in the queue.
     assert!(
         report.tx.dropped > 10 && report.tx.superseded > 40,
