@@ -143,8 +143,18 @@ fn run_against_pycyphal(setpoint_period: &str) -> Interop {
     }
 }
 
-/// The last readiness and setpoint PyCyphal decoded are STANDBY and zero.
+/// The last readiness and setpoint PyCyphal decoded are STANDBY and zero, and it discarded no
+/// frame of either subject for its transfer-ID: propid numbers only the transfers that leave, so
+/// none can look like a repeat (frames python-can loses show as other reassembly errors).
 fn assert_standby_last(report: &serde_json::Value) {
+    for sub in ["setpoints", "readiness"] {
+        assert_eq!(
+            report["reassembly_errors"][sub]["UNEXPECTED_TRANSFER_ID"].as_u64(),
+            Some(0),
+            "PyCyphal discarded {sub} frames for their transfer-ID: {}",
+            report["reassembly_errors"]
+        );
+    }
     let readiness = report["readiness"].as_array().unwrap();
     assert_eq!(
         readiness.last().and_then(|v| v.as_u64()),
@@ -176,6 +186,7 @@ fn propid_and_pycyphal_understand_each_other_over_slcan() {
         assert_eq!(r[5], 0.25, "position {r:?}");
     }
     assert!(report["sent"].as_array().unwrap().len() >= rows.len());
+    assert_standby_last(&report);
 
     // propid → PyCyphal: ENGAGED while driving, STANDBY at the end; setpoints decoded the same.
     let readiness: Vec<u64> = report["readiness"]
@@ -233,7 +244,10 @@ fn at_the_seeds_5_ms_period_the_run_completes_with_standby_last_and_drops_report
             .unwrap_or_else(|| panic!("no `{key}` count in {summary}"))
     };
     let (dropped, busy) = (count("frames dropped "), count("link busy "));
-    eprintln!("PyCyphal at 5 ms: {dropped} frames dropped, the link busy {busy} times");
+    eprintln!(
+        "PyCyphal at 5 ms: {dropped} frames dropped, the link busy {busy} times; its reassembly errors {}",
+        report["reassembly_errors"]
+    );
     eprintln!("{summary}");
 }
 
