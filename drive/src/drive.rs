@@ -587,6 +587,15 @@ impl Drive {
         }
     }
 
+    /// Drops the frame held for the link, if any (counted): it never reached the bus, so its
+    /// transfer-ID goes back to its subject ([`propid_core::node::Node::unsent`]).
+    fn drop_held(&mut self) {
+        if let Some(f) = self.held.take() {
+            self.held_dropped += 1;
+            self.node.unsent(&f);
+        }
+    }
+
     /// Nothing is queued or held for the link.
     fn nothing_waiting(&self) -> bool {
         self.held.is_none() && self.node.is_transmit_queue_empty()
@@ -598,10 +607,7 @@ impl Drive {
         };
         let reason = s.reason.clone();
         // Whatever is still queued will never be sent.
-        if let Some(f) = self.held.take() {
-            self.held_dropped += 1;
-            self.node.unsent(&f);
-        }
+        self.drop_held();
         self.held_dropped += self.node.transmit_queue_len() as u64;
         self.last_now = self.last_now.max(now);
         self.phase = Phase::Stopped;
@@ -622,12 +628,8 @@ impl Drive {
         if self.stopping.is_some() {
             return;
         }
-        // A held frame never reached the bus: its transfer-ID goes back to its subject, so
         // STANDBY and the zero setpoint follow on from the last transfers a receiver took.
-        if let Some(f) = self.held.take() {
-            self.held_dropped += 1;
-            self.node.unsent(&f);
-        }
+        self.drop_held();
         self.node.purge_transmit();
         self.phase = Phase::Stopping;
         self.events.push_back(DriveEvent::Stopping(reason.clone()));
@@ -722,14 +724,12 @@ impl Drive {
         if self.phase == Phase::Stopped {
             return None;
         }
+        // A frame the link refused until its deadline is stale: dropped, the queue goes on.
+        if now > self.held_deadline {
+            self.drop_held();
+        }
         let frame = match self.held.take() {
-            Some(f) if now <= self.held_deadline => Some(f),
-            Some(stale) => {
-                // Refused until stale: it never reached the bus, and gives its transfer-ID back.
-                self.held_dropped += 1;
-                self.node.unsent(&stale);
-                self.node.poll_transmit(now)
-            }
+            Some(f) => Some(f),
             None => self.node.poll_transmit(now),
         }?;
         if self.phase == Phase::Stopping {

@@ -365,15 +365,13 @@ fn standby_last(peer: &serde_json::Value, summary: &str) -> f64 {
     // many were superseded or purged meanwhile: it takes every one. (When IDs were given at
     // publication, a stop's first zero setpoint could carry the ID of the last setpoint that
     // crossed before the stall, 32 or 64 IDs earlier, and PyCyphal discarded it as a repeat.)
-    let sent_counts = summary
+    // "… sent (N and M times) …": N STANDBY, M zero setpoints.
+    let (standby_sent, zeros_sent) = summary
         .split_once("sent (")
         .and_then(|(_, rest)| rest.split_once(" times)"))
-        .map(|(counts, _)| counts)
+        .and_then(|(counts, _)| counts.split_once(" and "))
+        .and_then(|(n, m)| Some((n.parse::<u64>().ok()?, m.parse::<u64>().ok()?)))
         .unwrap_or_else(|| panic!("no `sent (N and M times)` in {summary}"));
-    let (standby_sent, zeros_sent) = (
-        count(&format!("STANDBY {sent_counts}"), "STANDBY "),
-        count(sent_counts, " and "),
-    );
     let trailing_zeros = setpoints
         .iter()
         .rev()

@@ -9,7 +9,7 @@
 //! Seeds are drawn from a fixed seed (printed), so a failure is reproducible.
 
 use propid_io::tsv::{Row, Sample};
-use propid_mechsim::scenarios::{Bench, Expect, Hidden, Scenario};
+use propid_mechsim::scenarios::{Bench, Expect, ExpectedEffect, Hidden, Scenario};
 use propid_mechsim::{pattern, MechConfig, Record};
 use propid_science::diagnose::{diagnose_rows, NearMiss, Options, Report, SeparatingRun, Verdict};
 use rand::rngs::StdRng;
@@ -123,7 +123,7 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
             }
         }
         Expect::Effect(e) => {
-            let tolerance = 0.10 + e.derivation_error;
+            let tolerance = tolerance(&e);
             let found = if let Some(a) = &r.ambiguity {
                 // A rotor that never reverses (lo > 0) cannot tell a Coulomb friction from a
                 // force offset: both are one constant torque, on any pattern.
@@ -199,13 +199,19 @@ fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
     bad
 }
 
+/// How far an estimate of `e` may be off, relatively: 10 %, plus what the scenario's own
+/// derivation of the expected value may miss by.
+fn tolerance(e: &ExpectedEffect) -> f64 {
+    0.10 + e.derivation_error
+}
+
 /// The expected effect among the near misses of a report that names nothing, at the right value
 /// (within the tolerance `judge` gives a named one).
 fn near_miss_of<'r>(s: &Scenario, r: &'r Report) -> Option<&'r NearMiss> {
     let Expect::Effect(e) = s.expect else {
         return None;
     };
-    let tolerance = 0.10 + e.derivation_error;
+    let tolerance = tolerance(&e);
     (r.verdict == Verdict::NothingWrong)
         .then(|| {
             r.near_misses

@@ -257,30 +257,28 @@ impl<
             .map_err(|_| NodeError::TooManyPorts)
     }
 
-    fn next_transfer_id(&mut self, service: bool, port: u16) -> Result<u8, TxError> {
-        if let Some(t) = self.transfer_ids.get_mut(&(service, port)) {
-            let tid = *t;
-            *t = (tid + 1) % 32;
-            return Ok(tid);
+    /// The transfer-ID counter of a port, made when it has none yet (refused when the table of
+    /// counters is full).
+    fn transfer_id_counter(&mut self, service: bool, port: u16) -> Result<&mut u8, TxError> {
+        let key = (service, port);
+        if !self.transfer_ids.contains_key(&key) {
+            self.transfer_ids
+                .insert(key, 0)
+                .map_err(|_| TxError::TooManyPorts)?;
         }
-        self.transfer_ids
-            .insert((service, port), 1)
-            .map_err(|_| TxError::TooManyPorts)?;
-        Ok(0)
+        self.transfer_ids.get_mut(&key).ok_or(TxError::TooManyPorts)
+    }
+
+    fn next_transfer_id(&mut self, service: bool, port: u16) -> Result<u8, TxError> {
+        Ok(take_transfer_id(self.transfer_id_counter(service, port)?))
     }
 
     /// The transfer-ID the next message on `subject_id` will leave with, making room for its
     /// counter if it has none yet. The ID is given for good only as the transfer's first frame
     /// leaves ([`TxQueue::pop_assigning`]): one that never leaves takes none.
     fn provisional_transfer_id(&mut self, subject_id: SubjectId) -> Result<u8, TxError> {
-        let key = (false, subject_id.get());
-        if let Some(t) = self.transfer_ids.get(&key) {
-            return Ok(*t);
-        }
-        self.transfer_ids
-            .insert(key, 0)
-            .map_err(|_| TxError::TooManyPorts)?;
-        Ok(0)
+        self.transfer_id_counter(false, subject_id.get())
+            .map(|t| *t)
     }
 
     fn enqueue(
@@ -477,17 +475,8 @@ impl<
         self.poll_port_list(now);
         let (counters, heartbeat_tid) = (&mut self.transfer_ids, &mut self.heartbeat_tid);
         self.queue.pop_assigning(now, &mut |subject| {
-            let counter = if subject == HEARTBEAT_SUBJECT {
-                Some(&mut *heartbeat_tid)
-            } else {
-                counters.get_mut(&(false, subject.get()))
-            };
             // Every queued message's subject has a counter: `publish` made room for it.
-            counter.map_or(0, |t| {
-                let tid = *t;
-                *t = (tid + 1) % 32;
-                tid
-            })
+            message_counter(counters, heartbeat_tid, subject).map_or(0, take_transfer_id)
         })
     }
 
@@ -514,11 +503,7 @@ impl<
         if !tail.end {
             self.queue.drop_in_progress();
         }
-        let counter = if subject_id == HEARTBEAT_SUBJECT {
-            Some(&mut self.heartbeat_tid)
-        } else {
-            self.transfer_ids.get_mut(&(false, subject_id.get()))
-        };
+        let counter = message_counter(&mut self.transfer_ids, &mut self.heartbeat_tid, subject_id);
         if let Some(t) = counter.filter(|t| **t == (tail.transfer_id + 1) % 32) {
             *t = tail.transfer_id;
         }
@@ -535,4 +520,25 @@ impl<
             Some(self.now)
         }
     }
+}
+
+/// The counter a message on `subject` takes its transfer-ID from: the heartbeat's own, or the
+/// subject's in `counters` (`None` when it has none).
+fn message_counter<'a, const PORTS: usize>(
+    counters: &'a mut heapless::LinearMap<(bool, u16), u8, PORTS>,
+    heartbeat_tid: &'a mut u8,
+    subject: SubjectId,
+) -> Option<&'a mut u8> {
+    if subject == HEARTBEAT_SUBJECT {
+        Some(heartbeat_tid)
+    } else {
+        counters.get_mut(&(false, subject.get()))
+    }
+}
+
+/// The counter's transfer-ID, which it then advances (modulo 32).
+fn take_transfer_id(counter: &mut u8) -> u8 {
+    let tid = *counter;
+    *counter = (tid + 1) % 32;
+    tid
 }

@@ -153,8 +153,8 @@ impl<const N: usize> TxQueue<N> {
         n
     }
 
-    /// Drops the rest of the transfer in progress (counted as expired): its first frame, popped,
-    /// never reached the bus. Returns how many frames went.
+    /// Drops the rest of the transfer in progress (counted as expired): its deadline passed, or
+    /// its first frame, popped, never reached the bus. Returns how many frames went.
     pub fn drop_in_progress(&mut self) -> usize {
         let n = self.pinned;
         self.entries.truncate(self.entries.len() - n);
@@ -296,10 +296,8 @@ impl<const N: usize> TxQueue<N> {
             }
             if now > entry.deadline {
                 // The rest of its transfer shares the deadline: drop it too.
-                self.stats.expired += 1 + self.pinned as u64;
-                let len = self.entries.len() - self.pinned;
-                self.entries.truncate(len);
-                self.pinned = 0;
+                self.stats.expired += 1;
+                self.drop_in_progress();
                 continue;
             }
             let mut frame = entry.frame;

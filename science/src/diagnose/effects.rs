@@ -1573,7 +1573,7 @@ fn ambiguous(a: &CandidateScore, b: &CandidateScore, gain_a: f64, gain_b: f64) -
         values: [a.value, b.value],
         units: [a.kind.unit(), b.kind.unit()],
         cv_gain_percent: [gain_a * 100.0, gain_b * 100.0],
-        separate_with: format!("`propid drive {}`: {}", run.flags(), run.why),
+        separate_with: run.advice(),
         separating_run: run,
     }
 }
@@ -1596,40 +1596,25 @@ fn near_miss(c: &CandidateScore) -> Option<NearMiss> {
             unit: c.kind.unit(),
             cv_gain_percent: c.cv_gain_percent,
             simulation_gain_percent: c.simulation_gain_percent,
-            look_with: format!("`propid drive {}`: {}", run.flags(), run.why),
+            look_with: run.advice(),
             revealing_run: run,
         }
     })
 }
 
-/// The run that shows one effect more clearly than the data at hand may.
+/// The run that shows one effect more clearly than the data at hand may: for a lag a chirp; for
+/// the others (frictions, offset, drag shape, braking) the run that separates the effect from
+/// itself in [`separating_run`], which is the run that shows its own shape.
 fn revealing_run(kind: EffectKind) -> SeparatingRun {
-    use EffectKind::*;
-    match kind {
-        CoulombFriction | ViscousFriction | DragExponent | ForceOffset => SeparatingRun {
-            pattern: "steps",
-            lo: Some(0.02),
-            hi: Some(0.9),
-            why: "held speeds down to low ones, where a constant torque, one ∝ ω and one ∝ ω^p differ most from c2·ω²",
-        },
-        BrakingTorque => SeparatingRun {
-            pattern: "steps",
-            lo: None,
-            hi: None,
-            why: "held speeds, then sudden slowing, where only braking acts",
-        },
-        _ if kind.is_lag() => SeparatingRun {
+    if kind.is_lag() {
+        SeparatingRun {
             pattern: "chirp",
             lo: None,
             hi: None,
             why: "a sweep of frequencies: a lag's effect grows with frequency, and one sinusoid at 0.5 Hz hardly shows a few milliseconds",
-        },
-        _ => SeparatingRun {
-            pattern: "chirp",
-            lo: None,
-            hi: None,
-            why: "a sweep of frequencies and speeds",
-        },
+        }
+    } else {
+        separating_run(kind, kind)
     }
 }
 
@@ -1725,6 +1710,9 @@ fn try_candidate(
         .unwrap_or((f64::NAN, f64::NAN));
     let mut note = String::new();
     let mut sim_gain = f64::NAN;
+    // What the trial model gains in the held-out simulation of the velocity.
+    let simulation_gain =
+        || 1.0 - sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured)) / current_sim;
     // A braking torque B steps the acceleration by B/J where it engages, and the samples it acts
     // on are chosen from the reported acceleration: a step below that signal's noise would be
     // chosen by the noise (a filtered acceleration's noise is correlated from sample to sample,
@@ -1750,14 +1738,12 @@ fn try_candidate(
         );
         // A near miss, should nothing be named: what the simulation says of it too.
         if gain >= NEAR_MISS_GAIN && wins == FOLDS {
-            let rms = sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured));
-            sim_gain = 1.0 - rms / current_sim;
+            sim_gain = simulation_gain();
         }
     } else if wins < MIN_FOLDS_BETTER {
         note = format!("better in only {wins} of {FOLDS} folds");
     } else {
-        let rms = sim_of(&trial).map_or(f64::INFINITY, |v| rms_error(&v, measured));
-        sim_gain = 1.0 - rms / current_sim;
+        sim_gain = simulation_gain();
         // A torque periodic in rotor angle turns faster than the samples resolve (6–12 periods a
         // turn at 1500 rad/s: 36–72 rad of ripple phase per sample at 250 Hz); the simulation
         // sees its mean over each step, about nothing, so the simulated velocity cannot judge it
@@ -2087,7 +2073,7 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
     }
 
     // Close calls of the round that named nothing: consistent evidence below the threshold.
-    let last_round = &candidates[last_round_start.min(candidates.len())..];
+    let last_round = &candidates[last_round_start..];
     let mut near_misses: Vec<NearMiss> =
         if ambiguity.is_none() && !last_round.iter().any(|c| c.selected) {
             last_round.iter().filter_map(near_miss).collect()

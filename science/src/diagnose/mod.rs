@@ -264,6 +264,11 @@ pub struct SeparatingRun {
 }
 
 impl SeparatingRun {
+    /// The advice in words: the `propid drive` command, and what it shows.
+    pub fn advice(&self) -> String {
+        format!("`propid drive {}`: {}", self.flags(), self.why)
+    }
+
     /// The `propid drive` flags.
     pub fn flags(&self) -> String {
         let mut s = format!("--pattern {}", self.pattern);
