@@ -4,7 +4,7 @@
 
 use propid_io::import::{import_autoquad, import_rcbench, Imported, RcbenchOptions};
 use propid_io::tsv::Sample;
-use propid_science::diagnose::{diagnose, Options, Report};
+use propid_science::diagnose::{diagnose, Condition, Decision, Options, Report};
 
 fn data(path: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -91,7 +91,9 @@ fn rcbench_drag_law_table() {
             law.exponent,
             law.exponent_stderr
         );
-        assert!(law.cv_gain_percent < 3.0 && !law.selected && r.effects.is_empty());
+        assert!(
+            law.cv_gain_percent < 3.0 && law.decision != Decision::Named && r.effects.is_empty()
+        );
         c2s.push(law.c2);
         // The rates: the torque's median sample interval, the rpm's median change interval.
         let q: Vec<f64> = imported
@@ -141,21 +143,24 @@ const RPM_RATE: (f64, f64) = (41.0, 142.0);
 fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
     let (imported, r) = autoquad("f40_steps_5-2", 1600.0);
     assert!(imported.assumptions.iter().any(|a| a.contains("Kt")));
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+    let names: Vec<&str> = r.effects.iter().map(|e| e.effect.name()).collect();
     assert!(names.contains(&"force_sensor_lag"), "{names:?}");
     // docs/REAL_DATA.md §3: 57.1 ± 1.1 ms (continuous signals between samples; a held-input
     // reading would add half the 10 ms row interval).
     let (lag, stderr) = r
         .effects
         .iter()
-        .find(|e| e.name == "force_sensor_lag")
+        .find(|e| e.effect.name() == "force_sensor_lag")
         .map(|e| (e.value, e.stderr))
         .unwrap();
     assert!(
         (lag - 0.0571).abs() < 3.0 * stderr + 1e-4,
         "telemetry lag {lag} s ± {stderr}"
     );
-    let braking = r.effects.iter().find(|e| e.name == "braking_torque");
+    let braking = r
+        .effects
+        .iter()
+        .find(|e| e.effect.name() == "braking_torque");
     assert!(
         braking.is_some_and(|b| (b.value - 6.09e-3).abs() < 3.0 * b.stderr + 1e-5),
         "{:?}",
@@ -168,9 +173,9 @@ fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
     );
     // The inertia of a 7-inch propeller and an outrunner rotor: 1e-5 .. 1e-4 kg·m².
     assert!(
-        (1e-5..1e-4).contains(&r.extended.mass),
+        (1e-5..1e-4).contains(&r.extended.inertia),
         "J {}",
-        r.extended.mass
+        r.extended.inertia
     );
     assert!(
         r.simulation_rms.gain_percent > 10.0,
@@ -187,7 +192,7 @@ fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
 fn esc32_f60_remaining_error_is_localized() {
     use propid_science::diagnose::Verdict;
     let (_, r) = autoquad("esc32v3_f60-1", 1750.0);
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+    let names: Vec<&str> = r.effects.iter().map(|e| e.effect.name()).collect();
     assert_eq!(names, ["force_sensor_lag"], "{names:?}");
     let lag = r.effects[0].value;
     assert!(
@@ -201,7 +206,7 @@ fn esc32_f60_remaining_error_is_localized() {
     );
     assert_eq!(r.verdict, Verdict::Unexplained);
     let c = r.concentration.as_ref().expect("the error is localized");
-    assert_eq!(c.condition, "time_window");
+    assert_eq!(c.condition, Condition::TimeWindow);
     assert!(
         (c.from_s - 92.5).abs() < 0.1 && (c.to_s - 95.1).abs() < 0.1,
         "{c:?}"

@@ -46,6 +46,8 @@ pub use report::{
     MAX_RELATIVE_STDERR,
 };
 pub use search::CandidateScore;
+#[doc(hidden)]
+pub use search::COUNTS;
 pub use select::{
     Decision, Evidence, FoldErrors, Gain, Rejection, KEEP_GAIN, MIN_GAIN, NEAR_MISS_GAIN,
     SIGNIFICANT,

@@ -157,15 +157,18 @@ fn profiled(model: &Model, index: usize, fit: &Fit, s: &Signals) -> f64 {
 fn try_effect(
     kind: EffectKind,
     parent: &Scored,
+    seed: Option<Effect>,
     s: &Signals,
     plan: &SimPlan,
 ) -> Result<Trial, Rejection> {
+    COUNTS[0].fetch_add(1, Ordering::Relaxed);
     let candidate = kind.candidate();
     let tuner = Tuner {
         model: &parent.model,
         s,
         kind,
         parent: &parent.cv,
+        seed,
     };
     let (effect, _) = candidate.tune(&tuner).ok_or(Rejection::NotFitted)?;
     let model = parent.model.with(effect).ok_or(Rejection::TooWide)?;
@@ -213,6 +216,13 @@ fn try_effect(
     })
 }
 
+/// Trials, pair trials and exchange trials run (profiling counts).
+pub static COUNTS: [AtomicUsize; 3] = [
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+];
+
 /// The pooled gain of `after` over `before` [%].
 fn pooled_percent(before: &[f64], after: &[f64]) -> f64 {
     100.0 * (1.0 - after.iter().sum::<f64>() / before.iter().sum::<f64>())
@@ -254,6 +264,7 @@ fn retune(m: Model, s: &Signals, skip: Option<usize>) -> Model {
             s,
             kind: e.kind,
             parent: &cv,
+            seed: None,
         };
         let Some((next, Some(next_cv))) = e.candidate().retune(&e, &tuner) else {
             continue;
@@ -309,25 +320,60 @@ impl Search<'_> {
     }
 
     /// `kinds` tried on `parent`, in parallel; those that could not be tried recorded in the
-    /// first round.
+    /// first round. An effect that refines another is tried after it, and only where it passes
+    /// rules 1–4.
     fn trials(&mut self, kinds: &[EffectKind], parent: &Scored) -> Vec<Trial> {
         let (s, plan, progress, round) = (self.s, self.plan, self.progress, self.round);
         let done = AtomicUsize::new(0);
         let of = kinds.len();
         progress(Stage::Candidates { round, done: 0, of });
-        let outcomes = in_parallel(kinds, |&k| {
-            let r = try_effect(k, parent, s, plan);
+        let (first, refining): (Vec<EffectKind>, Vec<EffectKind>) =
+            kinds.iter().partition(|k| k.refines().is_none());
+        let run = |jobs: &[(EffectKind, Option<Effect>)]| {
+            in_parallel(jobs, |&(k, seed)| {
+                let r = try_effect(k, parent, seed, s, plan);
+                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(Stage::Candidates { round, done: d, of });
+                (k, r)
+            })
+        };
+        let jobs: Vec<(EffectKind, Option<Effect>)> = first.iter().map(|&k| (k, None)).collect();
+        let mut outcomes = run(&jobs);
+        let passed = |k: EffectKind, outcomes: &[(EffectKind, Result<Trial, Rejection>)]| {
+            outcomes.iter().find_map(|(kind, r)| match r {
+                Ok(t)
+                    if *kind == k
+                        && matches!(
+                            select::judge(&parent.errors(), &t.evidence),
+                            None | Some(Decision::NearMiss)
+                        ) =>
+                {
+                    Some(t.effect)
+                }
+                _ => None,
+            })
+        };
+        let jobs: Vec<(EffectKind, Option<Effect>)> = refining
+            .iter()
+            .filter_map(|&k| {
+                k.refines()
+                    .and_then(|r| passed(r, &outcomes))
+                    .map(|e| (k, Some(e)))
+            })
+            .collect();
+        outcomes.extend(run(&jobs));
+        // Refiners not tried count as done.
+        for _ in jobs.len()..refining.len() {
             let d = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress(Stage::Candidates { round, done: d, of });
-            r
-        });
+        }
         let mut trials = Vec::new();
-        for (k, outcome) in kinds.iter().zip(outcomes) {
+        for (k, outcome) in outcomes {
             match outcome {
                 Ok(t) => trials.push(t),
                 // Tried and could not be: said once, in the first round.
                 Err(reason) if round == 1 => self.found.candidates.push(CandidateScore {
-                    effect: *k,
+                    effect: k,
                     round,
                     value: f64::NAN,
                     stderr: f64::NAN,
@@ -343,6 +389,8 @@ impl Search<'_> {
                 Err(_) => {}
             }
         }
+        // In the order of the kinds asked for (the same report whatever the order of work).
+        trials.sort_by_key(|t| kinds.iter().position(|k| *k == t.effect.kind));
         trials
     }
 
@@ -531,6 +579,7 @@ impl Search<'_> {
             if rivals.is_empty() {
                 continue;
             }
+            COUNTS[2].fetch_add(rivals.len(), Ordering::Relaxed);
             let trials = self.trials(&rivals, &rest);
             let parameters = old.candidate().parameters();
             let mut replace: Option<Trial> = None;
@@ -634,6 +683,7 @@ fn try_pair(
     s: &Signals,
     plan: &SimPlan,
 ) -> Option<Scored> {
+    COUNTS[1].fetch_add(1, Ordering::Relaxed);
     let with_a = parent.model.with(a)?;
     let cv = cross_validate(&with_a, s)?;
     let tuner = Tuner {
@@ -641,6 +691,7 @@ fn try_pair(
         s,
         kind,
         parent: &cv,
+        seed: None,
     };
     let (b, _) = kind.candidate().tune(&tuner)?;
     let both = retune(with_a.with(b)?, s, None);

@@ -149,12 +149,14 @@ pub(crate) fn simulate(
         if i + 1 >= range.end {
             break;
         }
+        // The midpoint rule: a step is a few hundredths of the rotor's speed time constant
+        // J/(2·c2·ω) at most (1–10 ms against 0.3–1 s), where its error, of third order in the
+        // step, is far below the velocity's noise; it evaluates three regression rows per step,
+        // RK4 seven.
         let dt = s.t[i + 1] - s.t[i];
         let k1 = accel(i, 0.0, w);
         let k2 = accel(i, 0.5, w + 0.5 * dt * k1);
-        let k3 = accel(i, 0.5, w + 0.5 * dt * k2);
-        let k4 = accel(i, 1.0, w + dt * k3);
-        w += dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        w += dt * k2;
         if !w.is_finite() {
             w = 0.0;
         }

@@ -21,6 +21,9 @@ pub(crate) struct Tuner<'a> {
     pub kind: EffectKind,
     /// The held-out scores of `model`.
     pub parent: &'a Cv,
+    /// The effect a refining candidate starts from (see `Candidate::refines`), as tuned on the
+    /// same model.
+    pub seed: Option<Effect>,
 }
 
 /// The held-out mean squared error of a cross-validation that may have failed.

@@ -8,7 +8,7 @@
 //! torque lag with the steps placed both ways, and the held-out error chooses (a 23 ms
 //! acceleration filter on the staircase read as a torque lag that left J 6 % low otherwise).
 
-use super::{
+use super::{EffectKind, 
     admissible_lag, lag_grid, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible,
     Shape, Slot, CHIRP_FOR_A_LAG,
 };
@@ -64,6 +64,9 @@ impl Candidate for AccelerationLag {
     }
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         let slope = Effect::new(t.kind, 0.0);

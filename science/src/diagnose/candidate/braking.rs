@@ -15,7 +15,7 @@
 //! telemetry: σ ≈ 380 rad/s²), braking acts while the measured velocity's ±20 ms slope opposes
 //! it ([`SLOPE_BRAKING`]). The threshold is a choice between indicators, tuned on a grid.
 
-use super::{
+use super::{EffectKind, 
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot,
 };
@@ -105,6 +105,9 @@ impl Candidate for BrakingTorque {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         // Thresholds from twice the reported acceleration's noise up to 200 rad/s² (a drive acts

@@ -1,7 +1,7 @@
 //! `coulomb_friction`: a constant torque opposing rotation (bearings, seals, cogging's mean, or a
 //! torque estimate's offset on a rotor that reverses). Regressor −sgn ω.
 
-use super::{
+use super::{EffectKind, 
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, LOW_SPEED_STEPS,
 };
@@ -42,6 +42,9 @@ impl Candidate for CoulombFriction {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         t.linear()

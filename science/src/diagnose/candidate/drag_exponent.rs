@@ -2,7 +2,7 @@
 //! speed: Reynolds number, blade flex). The drag column becomes −|ω|^p·sgn ω, p searched in
 //! 1.2–3.2; the seed's c2 is then the k of k·|ω|^p.
 
-use super::{
+use super::{EffectKind, 
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot,
     LOW_SPEED_STEPS, RESOLVED,
 };
@@ -66,6 +66,9 @@ impl Candidate for DragExponent {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         t.grid_then_golden(&grid(), |p| Effect::new(t.kind, p))

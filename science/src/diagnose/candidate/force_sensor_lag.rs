@@ -8,7 +8,7 @@
 
 use std::borrow::Cow;
 
-use super::{
+use super::{EffectKind, 
     admissible_lag, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, CHIRP_FOR_A_LAG,
 };
@@ -60,6 +60,9 @@ impl Candidate for ForceSensorLag {
     }
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         let first_order = Effect::new(t.kind, 0.0);

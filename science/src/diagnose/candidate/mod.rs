@@ -238,6 +238,9 @@ pub(crate) trait Candidate: Sync {
     /// Whether the simulation holds its columns over a step instead of interpolating them (a
     /// torque periodic in angle, already the mean over the step's sweep).
     fn held_in_simulation(&self) -> bool;
+    /// The effect it refines, if any: it is then tried only where that effect passes rules 1–4
+    /// in the same round, and tuned from its value (the tuner's `seed`).
+    fn refines(&self) -> Option<EffectKind>;
     /// Tunes its nonlinear parameter (and form) on the tuner's model; `None` when it cannot be
     /// tried (no position column for a ripple).
     fn tune(&self, t: &Tuner) -> Option<Tuned>;
@@ -459,6 +462,13 @@ pub(crate) const SHORTEST_LAG: f64 = 2e-4;
 /// neighbours then finds the minimum to 0.3 % of that bracket).
 pub(crate) fn lag_grid() -> Vec<f64> {
     (0..=10).map(|k| SHORTEST_LAG * 1.865f64.powi(k)).collect()
+}
+
+impl EffectKind {
+    /// The effect it refines (see [`Candidate::refines`]).
+    pub(crate) fn refines(self) -> Option<EffectKind> {
+        self.candidate().refines()
+    }
 }
 
 /// A lag is admissible when positive, resolved (more than [`RESOLVED`] standard errors) and

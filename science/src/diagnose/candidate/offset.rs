@@ -1,7 +1,7 @@
 //! `force_offset`: the reported force reads F₀ when no torque acts (a current-sense or load-cell
 //! zero). Regressor −1: on a rotor that never reverses, the same column as a Coulomb friction.
 
-use super::{
+use super::{EffectKind, 
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, LOW_SPEED_STEPS,
 };
@@ -42,6 +42,9 @@ impl Candidate for ForceOffset {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         t.linear()

@@ -4,7 +4,7 @@
 //! test.
 
 use super::ripple::{admissible_amplitude, amplitude};
-use super::{BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot};
+use super::{EffectKind, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot};
 use crate::diagnose::model::{At, Effect, LagShape, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
@@ -47,6 +47,9 @@ impl Candidate for PeriodicDisturbance {
         false
     }
     /// Its frequency comes from the residual's spectrum, not from a search.
+    fn refines(&self) -> Option<EffectKind> {
+        None
+    }
     fn tune(&self, _: &Tuner) -> Option<Tuned> {
         None
     }

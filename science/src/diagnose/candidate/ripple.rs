@@ -3,7 +3,7 @@
 //! (6–12 periods a turn at 1500 rad/s: tens of radians of ripple phase per sample), so the
 //! simulation sees its mean over each step, about nothing: the acceleration evidence decides.
 
-use super::{
+use super::{EffectKind, 
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot, RESOLVED,
 };
 use crate::diagnose::engine::{fit_on_all, residuals};
@@ -79,6 +79,9 @@ impl Candidate for TorqueRipple {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         true
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         // The harmonics of the rotor angle the current model's residual correlates with most (one

@@ -6,7 +6,7 @@
 
 use propid_io::tsv::{Row, Sample};
 
-use super::{
+use super::{EffectKind, 
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, RowEffect, Shape, Slot,
 };
 use crate::diagnose::model::{At, Effect, LagShape, Prepared};
@@ -98,6 +98,9 @@ impl Candidate for TimeBase {
         false
     }
     /// Measured from the rows, not tuned.
+    fn refines(&self) -> Option<EffectKind> {
+        None
+    }
     fn tune(&self, _: &Tuner) -> Option<Tuned> {
         None
     }

@@ -11,7 +11,7 @@
 
 use std::borrow::Cow;
 
-use super::{
+use super::{EffectKind, 
     admissible_lag, lag_grid, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible,
     Shape, Slot, CHIRP_FOR_A_LAG,
 };
@@ -55,6 +55,9 @@ impl Candidate for TorqueLag {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         let in_form = |form: LagForm| {

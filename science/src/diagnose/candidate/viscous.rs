@@ -1,7 +1,7 @@
 //! `viscous_friction`: a torque ∝ ω opposing rotation (the seed's c1, which its defaults force to
 //! zero). Regressor −ω.
 
-use super::{
+use super::{EffectKind, 
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, LOW_SPEED_STEPS,
 };
@@ -42,6 +42,9 @@ impl Candidate for ViscousFriction {
     fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
     fn held_in_simulation(&self) -> bool {
         false
+    }
+    fn refines(&self) -> Option<EffectKind> {
+        None
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
         t.linear()
