@@ -89,9 +89,9 @@ def fit(
         density=density,
     )
     if _is_path(data):
-        return FitResult(json.loads(_propid.fit_path(os.fspath(data), **bounds)))
+        return FitResult(json.loads(_propid.fit_path(os.fspath(data), bounds)))
     cols, name = _columns(data, _REQUIRED)
-    return FitResult(json.loads(_propid.fit_columns(*cols.values(), name, **bounds)))
+    return FitResult(json.loads(_propid.fit_columns(*cols.values(), name, bounds)))
 
 
 def diagnose(data: Data, *, max_effects: int = 3) -> Diagnosis:

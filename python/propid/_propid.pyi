@@ -1,6 +1,6 @@
 """Type stubs of the extension module (python/src/lib.rs): the Python layer's only way in."""
 
-from typing import Dict, List, Optional, Sequence, Tuple
+from typing import Dict, List, Optional, Sequence, Tuple, TypedDict
 
 import numpy as np
 import numpy.typing as npt
@@ -18,27 +18,19 @@ class CannotJudge(PropidError):
 
 Column = npt.NDArray[np.float64]
 
-def fit_path(
-    path: str,
-    mass_min: Optional[float] = ...,
-    mass_max: Optional[float] = ...,
-    c1_max: Optional[float] = ...,
-    c2_max: Optional[float] = ...,
-    diameter: Optional[float] = ...,
-    density: Optional[float] = ...,
-) -> str: ...
+class _Bounds(TypedDict):
+    """Every key present; None: the command's default."""
+
+    mass_min: Optional[float]
+    mass_max: Optional[float]
+    c1_max: Optional[float]
+    c2_max: Optional[float]
+    diameter: Optional[float]
+    density: Optional[float]
+
+def fit_path(path: str, bounds: _Bounds) -> str: ...
 def fit_columns(
-    t: Column,
-    force: Column,
-    velocity: Column,
-    acceleration: Column,
-    name: str,
-    mass_min: Optional[float] = ...,
-    mass_max: Optional[float] = ...,
-    c1_max: Optional[float] = ...,
-    c2_max: Optional[float] = ...,
-    diameter: Optional[float] = ...,
-    density: Optional[float] = ...,
+    t: Column, force: Column, velocity: Column, acceleration: Column, name: str, bounds: _Bounds
 ) -> str: ...
 def diagnose_path(path: str, max_effects: int = ...) -> Tuple[str, str, Optional[str]]: ...
 def diagnose_columns(

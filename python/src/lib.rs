@@ -69,23 +69,29 @@ fn input_error(e: impl std::fmt::Display) -> PyErr {
     InputError::new_err(e.to_string())
 }
 
-/// The fit's options: each `None` is the command's default.
-fn fit_options(
+/// The fit's bounds and C_Q geometry, from a dict with every key (`None`: the command's default).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct Bounds {
     mass_min: Option<f64>,
     mass_max: Option<f64>,
     c1_max: Option<f64>,
     c2_max: Option<f64>,
     diameter: Option<f64>,
     density: Option<f64>,
-) -> FitOptions {
-    let d = FitOptions::default();
-    FitOptions {
-        mass_min: mass_min.unwrap_or(d.mass_min),
-        mass_max: mass_max.unwrap_or(d.mass_max),
-        c1_max: c1_max.unwrap_or(d.c1_max),
-        c2_max: c2_max.unwrap_or(d.c2_max),
-        diameter,
-        density: density.unwrap_or(d.density),
+}
+
+impl From<Bounds> for FitOptions {
+    fn from(b: Bounds) -> FitOptions {
+        let d = FitOptions::default();
+        FitOptions {
+            mass_min: b.mass_min.unwrap_or(d.mass_min),
+            mass_max: b.mass_max.unwrap_or(d.mass_max),
+            c1_max: b.c1_max.unwrap_or(d.c1_max),
+            c2_max: b.c2_max.unwrap_or(d.c2_max),
+            diameter: b.diameter,
+            density: b.density.unwrap_or(d.density),
+        }
     }
 }
 
@@ -101,19 +107,8 @@ fn slice<'a>(a: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [f64]
 
 /// `propid fit FILE --format json`: the fit's report as JSON.
 #[pyfunction]
-#[pyo3(signature = (path, mass_min=None, mass_max=None, c1_max=None, c2_max=None, diameter=None, density=None))]
-#[allow(clippy::too_many_arguments)]
-fn fit_path(
-    py: Python<'_>,
-    path: PathBuf,
-    mass_min: Option<f64>,
-    mass_max: Option<f64>,
-    c1_max: Option<f64>,
-    c2_max: Option<f64>,
-    diameter: Option<f64>,
-    density: Option<f64>,
-) -> PyResult<String> {
-    let options = fit_options(mass_min, mass_max, c1_max, c2_max, diameter, density);
+fn fit_path(py: Python<'_>, path: PathBuf, bounds: Bounds) -> PyResult<String> {
+    let options = FitOptions::from(bounds);
     let result = py.detach(|| fit_path_with(&path, &options, false, &mut |_, _| {}));
     let (report, _) = result.map_err(|e| py_error(&e.into()))?;
     json(&report)
@@ -121,8 +116,6 @@ fn fit_path(
 
 /// The fit of columns (t, force, velocity, acceleration), named `name` in messages.
 #[pyfunction]
-#[pyo3(signature = (t, force, velocity, acceleration, name, mass_min=None, mass_max=None, c1_max=None, c2_max=None, diameter=None, density=None))]
-#[allow(clippy::too_many_arguments)]
 fn fit_columns(
     py: Python<'_>,
     t: PyReadonlyArray1<'_, f64>,
@@ -130,14 +123,9 @@ fn fit_columns(
     velocity: PyReadonlyArray1<'_, f64>,
     acceleration: PyReadonlyArray1<'_, f64>,
     name: &str,
-    mass_min: Option<f64>,
-    mass_max: Option<f64>,
-    c1_max: Option<f64>,
-    c2_max: Option<f64>,
-    diameter: Option<f64>,
-    density: Option<f64>,
+    bounds: Bounds,
 ) -> PyResult<String> {
-    let options = fit_options(mass_min, mass_max, c1_max, c2_max, diameter, density);
+    let options = FitOptions::from(bounds);
     let columns = Columns {
         t: slice(&t, "t")?,
         force: slice(&force, "force")?,
