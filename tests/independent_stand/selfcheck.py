@@ -278,53 +278,6 @@ def stages() -> None:
 # ----------------------------------------------------------------------------------------------
 
 
-def truth_reconstruction(case, doc, out) -> float:
-    """Rebuilds the rotor's acceleration from the noise-free reported columns using only what the
-    truth file says, and returns max |a_rebuilt - a_true| / rms(a_true). A truth file that misstates
-    a value or a sign fails this."""
-    g = out["grid"]
-    rotor_j = doc["J"]
-    eff = {e["name"]: e for e in doc["effects"]}
-    # Work on the state grid, where the stages were applied, so that the check is exact.
-    H = 1.0 / out["state_rate"]
-    force = g["force_reported"].copy()
-    if "force_offset" in eff:
-        force -= eff["force_offset"]["value"]
-    if "force_sensor_lag" in eff:
-        return float("nan")  # the felt torque is not recoverable from a filtered one exactly
-    felt = force
-    if "torque_lag" in eff:
-        m = eff["torque_lag"]["model"]
-        felt = stand.apply_stage(stand.first_order(m["tau_s"]), force, H)
-    w = g["omega"]
-    if "drag_exponent" in eff:
-        e = eff["drag_exponent"]
-        drag = np.sign(w) * e["drag_coefficient"] * np.abs(w) ** e["value"]
-    else:
-        drag = doc["c2"] * w * np.abs(w)
-    torque = felt - drag
-    if "viscous_friction" in eff:
-        torque -= eff["viscous_friction"]["value"] * w
-    if "coulomb_friction" in eff:
-        fc = eff["coulomb_friction"]["value"]
-        # Against the motion; at rest, against the drive torque that starts it.
-        torque -= fc * np.where(w != 0.0, np.sign(w), np.sign(felt))
-        # At rest it sticks while the drive torque is within the friction (the JSON's derivation).
-        torque = np.where((w == 0.0) & (np.abs(felt) <= fc), 0.0, torque)
-    for u in doc["unexplained"]:
-        on = (g["t"] >= u["t_start_s"]) & (g["t"] < u["t_end_s"])
-        torque -= np.where(on, u["torque_Nm"], 0.0)
-    if "braking_torque" in eff:
-        torque -= np.where(torque * np.sign(w) < 0.0, eff["braking_torque"]["value"] * np.sign(w), 0.0)
-    a = torque / rotor_j
-    accel = g["accel_reported"]
-    if "acceleration_lag" in eff:
-        a = stand.apply_stage(stand.first_order(eff["acceleration_lag"]["model"]["tau_s"]), a, H)
-    err = np.abs(a - accel)
-    scale = float(np.sqrt(np.mean(g["a"] ** 2)))
-    return float(np.max(err) / scale)
-
-
 def every_case() -> None:
     for base in stand.CASES:
         # 16 s keeps the check fast and still holds transient_early's window (10-13 s).
@@ -345,19 +298,18 @@ def every_case() -> None:
         check(f"{base.name}: energy balance |W_drive - dKE - W_lost| / W_drive",
               abs(work_in - ke - lost) / abs(work_in), 1e-5 if not switching else 1e-4)
 
-        r = truth_reconstruction(case, doc, out)
-        if np.isfinite(r):
-            check(f"{base.name}: acceleration rebuilt from the truth file, max error / rms(a)", r, 1e-9)
-        else:
-            # A filtered force: check the other direction, the truth stage applied to the felt torque.
-            e = next(e for e in doc["effects"] if e["name"] == "force_sensor_lag")["model"]
-            st = (stand.first_order(e["tau_s"]) if e["kind"] == "first_order"
-                  else stand.second_order(e["natural_frequency_hz"], e["damping_ratio"]))
-            src = g["felt"] if case.electric is None else doc["J"] * g["a"] + g["drag"]
-            rebuilt = stand.apply_stage(st, src, H) + case.force_offset
-            sel = g["t"] >= 1.0
-            check(f"{base.name}: reported torque = truth stage applied to the felt torque, max error / noise",
-                  float(np.max(np.abs(rebuilt - g["force_reported"])[sel])) / stand.SEVEN_INCH.torque_noise, 1e-6)
+        # The truth file against the data: the torque balance written from the JSON alone, on the
+        # grid where the stages were applied (so exact), relative to the torque noise.
+        resid = stand.truth_torque_residual(doc, g["t"], g["force_reported"], w, g["accel_reported"])
+        check(f"{base.name}: torque balance of the JSON's truth on the noise-free grid, max / torque noise",
+              float(np.max(np.abs(resid))) / case.rotor.torque_noise, 1e-9)
+        floor = doc["truth_model_on_noise_free_samples"]["relative_to_torque_noise"]
+        check(f"{base.name}: the same on the feedback samples (stages at {case.rate:g} Hz), rms / torque noise",
+              floor, 0.01)
+        if base.name == "clean":
+            seed_fit = doc["seed_model_on_noise_free_data"]
+            check("clean: the seed's model fitted to the noise-free data gives J and c2 exactly (max |error| %)",
+                  max(abs(seed_fit["J_error_pct"]), abs(seed_fit["c2_error_pct"])), 1e-6, " %")
 
 
 # ----------------------------------------------------------------------------------------------

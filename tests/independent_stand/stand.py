@@ -859,6 +859,69 @@ def seed_model_fit(force, accel, omega, trim=0.1):
     return 1.0 / x[0], x[1] / x[0]
 
 
+def stage_from_model(model: dict) -> Stage:
+    """The Stage a truth file's `model` describes."""
+    if model["kind"] == "first_order":
+        return first_order(model["tau_s"])
+    if model["kind"] == "delay":
+        return Stage("delay", tau=model["tau_s"])
+    return second_order(model["natural_frequency_hz"], model["damping_ratio"])
+
+
+def truth_torque_residual(doc: dict, t, force, omega, accel) -> np.ndarray:
+    """The torque balance of the truth model, written with only what the truth file `doc` says,
+    on reported columns sampled uniformly at times t: zero (to the discretisation of the stages on
+    that grid) on noise-free data, [N*m].
+
+    Without a force-sensor stage, the rotor's acceleration is rebuilt from the reported force
+    (offset removed, torque lag applied, drag, frictions, braking, load transients subtracted,
+    acceleration lag applied) and the residual is J*(rebuilt - reported acceleration). With one,
+    the felt torque is rebuilt from the reported acceleration and the losses, passed through the
+    sensor stage, offset added, and the residual is that minus the reported force."""
+    dt = float(t[1] - t[0])
+    eff = {e["name"]: e for e in doc["effects"]}
+    J = doc["J"]
+    w = np.asarray(omega, dtype=float)
+    sgn = np.sign(w)
+    if "drag_exponent" in eff:
+        e = eff["drag_exponent"]
+        drag = sgn * e["drag_coefficient"] * np.abs(w) ** e["value"]
+    else:
+        drag = doc["c2"] * w * np.abs(w)
+    losses = drag.copy()
+    if "viscous_friction" in eff:
+        losses += eff["viscous_friction"]["value"] * w
+    load = np.zeros_like(w)
+    for u in doc["unexplained"]:
+        load += np.where((t >= u["t_start_s"]) & (t < u["t_end_s"]), u["torque_Nm"], 0.0)
+    offset = eff["force_offset"]["value"] if "force_offset" in eff else 0.0
+    fc = eff["coulomb_friction"]["value"] if "coulomb_friction" in eff else 0.0
+    brake = eff["braking_torque"]["value"] if "braking_torque" in eff else 0.0
+
+    if "force_sensor_lag" in eff:
+        # Braking acts exactly while the rotor slows: a*sgn(w) < 0.
+        a = np.asarray(accel, dtype=float)
+        felt = J * a + losses + fc * sgn + load + brake * np.where(a * sgn < 0.0, sgn, 0.0)
+        rebuilt = apply_stage(stage_from_model(eff["force_sensor_lag"]["model"]), felt, dt) + offset
+        return rebuilt - force
+
+    felt = np.asarray(force, dtype=float) - offset
+    if "torque_lag" in eff:
+        felt = apply_stage(stage_from_model(eff["torque_lag"]["model"]), felt, dt)
+    torque = felt - losses - load
+    if fc:
+        # Against the motion; at rest, against the drive torque that starts it; and at rest it
+        # sticks while the drive torque is within the friction.
+        torque -= fc * np.where(w != 0.0, sgn, np.sign(felt - load))
+        torque = np.where((w == 0.0) & (np.abs(felt - load) <= fc), 0.0, torque)
+    if brake:
+        torque -= np.where(torque * sgn < 0.0, brake * sgn, 0.0)
+    a = torque / J
+    if "acceleration_lag" in eff:
+        a = apply_stage(stage_from_model(eff["acceleration_lag"]["model"]), a, dt)
+    return J * (a - accel)
+
+
 def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
     rotor = case.rotor
     grid = out["grid"]
@@ -1124,6 +1187,18 @@ def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
             "method": "a = force/J - (c2/J)*w|w| by least squares on the noise-free reported "
             "force and acceleration and the true speed, first 10 % dropped (the seed's trimming), c1 = 0",
         },
+    }
+    # The floor: the truth model, written from this document alone, on the noise-free samples a
+    # diagnosis sees (its stages discretised at the feedback rate), after the seed's 10 % trimming.
+    resid = truth_torque_residual(
+        doc, out["t"], out["force_true"], out["velocity_true"], out["acceleration_true"]
+    )[int(0.1 * (len(out["t"]) - 1)) :]
+    doc["truth_model_on_noise_free_samples"] = {
+        "torque_residual_rms_Nm": _rms(resid),
+        "relative_to_torque_noise": _rms(resid) / rotor.torque_noise,
+        "meaning": "the torque balance of the stated truth on the noise-free samples (stages "
+        "discretised at the feedback rate, first 10 % dropped): how close a perfect diagnosis "
+        "can come before any noise; compare with the torque noise of one sample",
     }
     el = case.electric
     if el is not None:
