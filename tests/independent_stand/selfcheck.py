@@ -305,7 +305,7 @@ def every_case() -> None:
               float(np.max(np.abs(resid))) / case.rotor.torque_noise, 1e-9)
         floor = doc["truth_model_on_noise_free_samples"]["relative_to_torque_noise"]
         check(f"{base.name}: the same on the feedback samples (stages at {case.rate:g} Hz), rms / torque noise",
-              floor, 0.01)
+              floor, 0.05)
         if base.name == "clean":
             seed_fit = doc["seed_model_on_noise_free_data"]
             check("clean: the seed's model fitted to the noise-free data gives J and c2 exactly (max |error| %)",

@@ -253,6 +253,8 @@ class Case:
     braking: float = 0.0  # [N*m]
     transient: tuple[float, float, float] | None = None  # (t_start, length, torque)
     electric: Electric | None = None
+    thrust_sensor: Stage | None = None  # the thrust load cell's stage (electrical cases)
+    hold_rate: float = 0.0  # load-cell conversions per second, held between (0: fresh every sample)
     tags: tuple[str, ...] = field(default_factory=tuple)
 
 
@@ -389,6 +391,16 @@ CASES: list[Case] = [
         tags=("thrust", "electrical"),
     ),
     Case(
+        "thrust_loadcell",
+        "as thrust_sine, torque and thrust from load cells: 15 Hz zeta 0.7 stage, 80 Hz held conversions",
+        rotor=SEVEN_INCH_THRUST,
+        electric=ELECTRIC,
+        force_sensor=second_order(15.0, 0.7),
+        thrust_sensor=second_order(15.0, 0.7),
+        hold_rate=80.0,
+        tags=("thrust", "electrical"),
+    ),
+    Case(
         "thrust_steps",
         "as thrust_sine on duty steps 0.9 -> 0.1 -> 0.9 (9 levels, 3 s each)",
         rotor=SEVEN_INCH_THRUST,
@@ -439,7 +451,8 @@ def pattern_description(case: Case) -> dict:
     if case.pattern == "sine":
         d.update(
             period_s=case.period,
-            formula="u = (lo+hi)/2 + (hi-lo)/2 * sin(phase0 + 2*pi*t/period); phase0 random per seed",
+            formula="u = (lo+hi)/2 + (hi-lo)/2 * sin(phase0 + 2*pi*t/period); phase0 random per seed "
+            "(pi/2 in the duty-commanded cases: they start at hi, where the init left them)",
         )
     elif case.pattern == "chirp":
         d.update(
@@ -666,6 +679,10 @@ def simulate(case: Case, seed: int, noise_scale: float = 1.0, state_rate_min: fl
     H = 1.0 / f_state
     rng = _rng(seed, case.name)
     phase0 = float(rng.uniform(0.0, TWO_PI))
+    if case.electric is not None:
+        # A duty step from hi to lo at full speed would drive ~ -130 A of regenerative current
+        # (no current limit is modelled): the duty sine starts where the init left it.
+        phase0 = 0.5 * math.pi
     rotor = case.rotor
     J = rotor.J
 
@@ -781,7 +798,20 @@ def simulate(case: Case, seed: int, noise_scale: float = 1.0, state_rate_min: fl
     }
     s = noise_scale
     n = n_rows
-    noise_force = s * rotor.torque_noise * rng.standard_normal(n)
+    hold = None
+    if case.hold_rate > 0.0:
+        # Load-cell conversions at hold_phase + m/hold_rate; each row holds the last one.
+        hold_phase = float(rng.uniform(0.0, 1.0 / case.hold_rate))
+        m = np.floor((t - hold_phase) * case.hold_rate).astype(np.int64)
+        t_conv = hold_phase + m / case.hold_rate
+        hold = {"phase": hold_phase, "m": m - m.min(), "n": int(m.max() - m.min() + 1)}
+        out["force_true_continuous"] = out["force_true"]
+        out["force_true"] = np.interp(t_conv, grid["t"], force)
+    if hold is None:
+        noise_force = s * rotor.torque_noise * rng.standard_normal(n)
+    else:
+        # A held value carries the noise of its conversion.
+        noise_force = s * rotor.torque_noise * rng.standard_normal(hold["n"])[hold["m"]]
     noise_vel = s * rotor.velocity_noise * rng.standard_normal(n)
     wa = rng.standard_normal(n + 1)
     noise_acc = s * rotor.accel_noise * (wa[1:] - wa[:-1]) / math.sqrt(2.0)
@@ -793,18 +823,24 @@ def simulate(case: Case, seed: int, noise_scale: float = 1.0, state_rate_min: fl
     out["position"] = out["position_true"]
     out["ts_local"] = np.maximum.accumulate(t + host_offset + latency)
     if el is not None:
-        out["thrust_true"] = grid["thrust"][idx]
+        thrust = grid["thrust"]
+        if case.thrust_sensor is not None:
+            thrust = apply_stage(case.thrust_sensor, thrust, H)
+        grid["thrust_reported"] = thrust
+        out["thrust_true"] = thrust[idx] if hold is None else np.interp(t_conv, grid["t"], thrust)
         out["voltage_true"] = grid["voltage_bus"][idx]
         out["current_true"] = grid["current_reported"][idx]
         out["command"] = grid["duty"][idx]
-        out["thrust"] = out["thrust_true"] + s * el.thrust_noise * rng.standard_normal(n)
+        thrust_noise = s * el.thrust_noise * rng.standard_normal(n if hold is None else hold["n"])
+        out["thrust"] = out["thrust_true"] + (thrust_noise if hold is None else thrust_noise[hold["m"]])
         out["voltage"] = out["voltage_true"] + s * el.voltage_noise * rng.standard_normal(n)
         out["current"] = out["current_true"] + s * el.current_noise * rng.standard_normal(n)
     out["grid"] = grid
-    # The rotor's inputs on the half-step grid, for selfcheck's independent integration.
+    # The rotor's inputs on the grid, for selfcheck's independent integration.
     out["inputs"] = {"t": t_grid, "U": U, "D": Dm, "kp": kp, "p": p, "coulomb": coulomb, "braking": case.braking}
     out["sample_index"] = idx
     out["phase0"] = phase0
+    out["hold"] = hold
     out["state_rate"] = f_state
     return out
 
@@ -922,6 +958,17 @@ def truth_torque_residual(doc: dict, t, force, omega, accel) -> np.ndarray:
     return J * (a - accel)
 
 
+def hold_description(case: Case, out: dict) -> dict:
+    return {
+        "conversions_per_s": case.hold_rate,
+        "first_conversion_s": out["hold"]["phase"] - 1.0 / case.hold_rate,
+        "rule": "conversions at first_conversion_s + m/conversions_per_s; a row holds the stage's "
+        "output at the last conversion at or before its t (with that conversion's noise), so the "
+        "value updates on about one row in rate/conversions_per_s; read at its updates, the stage's "
+        "lag is the value above, and the hold adds nothing",
+    }
+
+
 def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
     rotor = case.rotor
     grid = out["grid"]
@@ -979,15 +1026,16 @@ def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
             src = grid.get("torque_reported_source", grid["felt"])[idx]
         else:
             src = rotor.J * a_true + grid["drag"][idx]
-        effects.append(
-            lag_entry(
-                "force_sensor_lag",
-                case.force_sensor,
-                _rms(out["force_true"] - case.force_offset - src),
-                "the reported torque is the felt torque through this stage (a telemetry filter or "
-                "a load cell)",
-            )
+        entry = lag_entry(
+            "force_sensor_lag",
+            case.force_sensor,
+            _rms(out.get("force_true_continuous", out["force_true"]) - case.force_offset - src),
+            "the reported torque is the felt torque through this stage (a telemetry filter or "
+            "a load cell)",
         )
+        if out["hold"] is not None:
+            entry["held"] = hold_description(case, out)
+        effects.append(entry)
     if case.accel_lag is not None:
         effects.append(
             lag_entry(
@@ -1191,14 +1239,19 @@ def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
     # The floor: the truth model, written from this document alone, on the noise-free samples a
     # diagnosis sees (its stages discretised at the feedback rate), after the seed's 10 % trimming.
     resid = truth_torque_residual(
-        doc, out["t"], out["force_true"], out["velocity_true"], out["acceleration_true"]
+        doc,
+        out["t"],
+        out.get("force_true_continuous", out["force_true"]),
+        out["velocity_true"],
+        out["acceleration_true"],
     )[int(0.1 * (len(out["t"]) - 1)) :]
     doc["truth_model_on_noise_free_samples"] = {
         "torque_residual_rms_Nm": _rms(resid),
         "relative_to_torque_noise": _rms(resid) / rotor.torque_noise,
         "meaning": "the torque balance of the stated truth on the noise-free samples (stages "
-        "discretised at the feedback rate, first 10 % dropped): how close a perfect diagnosis "
-        "can come before any noise; compare with the torque noise of one sample",
+        "discretised at the feedback rate, first 10 % dropped; a held force taken before its "
+        "hold): how close a perfect diagnosis can come before any noise; compare with the torque "
+        "noise of one sample",
     }
     el = case.electric
     if el is not None:
@@ -1218,7 +1271,8 @@ def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
             "voltage_column": "V_bus (after the supply's resistance), as the ESC measures it",
             "current_column": "I_bus, the supply (DC-link) current, after the current filter",
             "command_column": "PWM duty d as applied (float16)",
-            "force_column": "stator load cell: Kt*I - Kt*I0*sgn(w) = J*a + Q_aero (no effect hidden)",
+            "force_column": "stator load cell: Kt*I - Kt*I0*sgn(w) = J*a + Q_aero"
+            + (" through the load cell's stage (force_sensor_lag)" if case.force_sensor else " (no effect hidden)"),
             "no_load_torque_Nm": el.kt * el.I0,
         }
         doc["thrust"] = {
@@ -1230,8 +1284,16 @@ def truth(case: Case, seed: int, out: dict, noise_scale: float) -> dict:
             "law": "T = C_T*rho*n^2*D^4, Q = C_Q*rho*n^2*D^5, n = w/(2*pi) rev/s",
             "c2_from_C_Q": el.c2,
             "thrust_per_omega2": el.kthrust,
-            "thrust_sensor": "load cell, no lag, white noise",
+            "thrust_sensor": "load cell, no lag, white noise"
+            if case.thrust_sensor is None
+            else {
+                "model": case.thrust_sensor.describe(),
+                "equivalent_lag_s": case.thrust_sensor.equivalent_lag(),
+                "derivation": case.thrust_sensor.derivation(),
+            },
         }
+        if out["hold"] is not None:
+            doc["thrust"]["held"] = hold_description(case, out)
         doc["ideal_report"]["motor"] = {
             "Kv_rpm_per_V": el.kv_rpm_per_v,
             "R_ohm": el.R,
@@ -1291,8 +1353,13 @@ def markdown_table() -> str:
         if c.transient:
             t0, length, q = c.transient
             hidden.append(f"unexplained {t0:g}–{t0 + length:g} s (+{q:g} N·m load)")
+        if c.hold_rate:
+            hidden.append(f"held at {c.hold_rate:g} Hz")
         if c.electric:
-            hidden.append("none (C_T, C_Q, Kv, R, I0 to identify)")
+            hidden.append(
+                "C_T, C_Q, Kv, R, I0 to identify"
+                + (f"; thrust through the same {c.thrust_sensor.equivalent_lag() * 1e3:.4g} ms stage" if c.thrust_sensor else "")
+            )
         rotor = {"7-inch propeller": "7-inch", "large propeller": "large"}.get(c.rotor.label, "7-inch + motor")
         lohi = f"{c.pattern} ({c.lo:g}..{c.hi:g})"
         lines.append(
