@@ -1434,4 +1434,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except BrokenPipeError:  # `stand.py --list | head`: the reader left; nothing to report
+        sys.stderr.close()
+        sys.exit(0)
