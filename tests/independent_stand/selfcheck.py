@@ -76,7 +76,7 @@ def rotor_closed_forms() -> None:
 
     # Viscous + quadratic: steady w solves c2 w^2 + c1 w = Q.
     c1 = 3e-6
-    _, W, _ = run_constant(q, seconds=6.0, c1=c1)
+    _, W, _ = run_constant(q, seconds=10.0, c1=c1)
     w_exact = (-c1 + math.sqrt(c1 * c1 + 4 * C2 * q)) / (2 * C2)
     check("steady speed with viscous friction, c2 w^2 + c1 w = Q", abs(W[-1] / w_exact - 1.0), 1e-9)
 
@@ -89,7 +89,7 @@ def rotor_closed_forms() -> None:
     # Coulomb friction: steady w solves c2 w^2 + Fc = Q; spin-down with friction reaches zero and
     # sticks; a torque below Fc never starts the rotor.
     fc = 0.005
-    _, W, _ = run_constant(q, seconds=6.0, coulomb=fc)
+    _, W, _ = run_constant(q, seconds=10.0, coulomb=fc)
     check("steady speed with Coulomb friction, c2 w^2 + Fc = Q", abs(W[-1] / math.sqrt((q - fc) / C2) - 1.0), 1e-9)
     t, W, _ = run_constant(0.0, seconds=3.0, w0=300.0, coulomb=fc)
     # J w' = -c2 w^2 - Fc: w = sqrt(Fc/c2) tan(atan(w0/sqrt(Fc/c2)) - t sqrt(Fc c2)/J) until w = 0.
@@ -105,7 +105,7 @@ def rotor_closed_forms() -> None:
     # Braking: with constant q the rotor never slows from rest, so B has no effect; coasting
     # down from above the steady speed, it brakes with B while w' < 0: J w' = q - c2 w^2 - B.
     B = 0.008
-    _, W, _ = run_constant(q, seconds=6.0, braking=B)
+    _, W, _ = run_constant(q, seconds=10.0, braking=B)
     check("braking does not act while the rotor speeds up (steady = sqrt(Q/c2))", abs(W[-1] / w_ss - 1.0), 1e-9)
     t, W, _ = run_constant(q, seconds=1.0, w0=3000.0, braking=B)
     # Slowing all the way (the braked steady speed sqrt((q-B)/c2) is never reached; it ends at
