@@ -4,11 +4,13 @@
 # benchmark, all against the wheel's own `propid` command.
 # Reuse: CARGO_TARGET_DIR is the workspace's target/ (release profile, as the demo step's
 # `cargo run --release`), and the venv sees the numpy, scipy and pandas ci/setup.sh installed
-# (--system-site-packages). The demo's release artifacts are mostly rebuilt all the same: PyO3's
-# proc-macros enable more features of syn (so every proc-macro and what derives with it changes) and
-# numpy's num-traits needs `std` (so nalgebra and the numeric crates change). The `test` profile of
-# `cargo test --workspace` has them (features resolved over all members, python/ included), but
-# maturin builds through `cargo rustc`, which compiles a `test`-profile library as a test harness.
+# (--system-site-packages). Part of the demo's release artifacts is rebuilt all the same: PyO3's
+# proc-macros enable more features of syn (extra-traits, visit-mut), which changes every
+# proc-macro (serde_derive, thiserror-impl, clap_derive) and each crate that derives with one (serde,
+# clap, propid's io, science, drive, the command); core, nalgebra and the rest are reused. The `test`
+# profile of `cargo test --workspace` has those features (resolved over all members, python/
+# included), but maturin builds through `cargo rustc`, which compiles a `test`-profile library as a
+# test harness that Python cannot load.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 start=$(date +%s)
