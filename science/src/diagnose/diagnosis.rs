@@ -189,7 +189,8 @@ pub(crate) fn run(
             gain_percent: alone,
             cv_gain_percent: cv_gain,
             gain,
-            lag_form: e.candidate().lag_shape(e),
+            lag_form: e.candidate().lag(e, v.value).map(|l| l.shape),
+            lag_delay_s: e.candidate().lag(e, v.value).map(|l| l.delay),
             explanation: e.candidate().explanation(e, v.value),
         });
     }

@@ -202,6 +202,7 @@ pub fn diagnose_rows_observed(
                     cv_gain_percent: f64::NAN,
                     gain: no_gain,
                     lag_form: None,
+                    lag_delay_s: None,
                     explanation: m.kind.candidate().explanation(&e, m.estimate.value),
                 },
             );

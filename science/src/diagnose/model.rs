@@ -112,6 +112,17 @@ impl LagForm {
     }
 }
 
+/// A lag as reported: how it acts, and its delay at low frequency (what a first-order lag of the
+/// same data would measure: its time constant, a delay's length, a second-order stage's
+/// 2ζ/ω_n).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lag {
+    /// How it acts.
+    pub shape: LagShape,
+    /// Its delay at low frequency [s].
+    pub delay: f64,
+}
+
 /// How a named lag acts, in reports.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]

@@ -82,6 +82,10 @@ pub struct NamedEffect {
     /// For a lag, how it acts.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub lag_form: Option<LagShape>,
+    /// For a lag, its delay at low frequency [s] (a first-order lag's time constant, a delay's
+    /// length, a second-order stage's 2ζ/ω_n): what every lag's value compares by.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lag_delay_s: Option<f64>,
     /// A sentence on what it means.
     pub explanation: String,
 }

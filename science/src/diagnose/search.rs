@@ -193,13 +193,16 @@ fn try_effect(
         })
     };
     let trial = evaluate(model.clone())?;
-    // Where the trial may be named (or come close), the model's other nonlinear parameters are
-    // re-tuned with it: a lag tuned alone absorbs part of a constant torque, and keeps it
-    // unless re-tuned when the torque enters. (Only there: it is the costliest step of a trial.)
-    let contender = matches!(
-        select::judge(&parent.errors(), &trial.evidence),
-        None | Some(Decision::NearMiss)
-    );
+    // Where the trial may be named (or come close), or its value can be the effect, the model's
+    // other nonlinear parameters are re-tuned with it: a lag tuned alone absorbs part of a
+    // constant torque, and keeps it unless re-tuned when the torque enters; an exponent tuned
+    // alone absorbs an offset, which then gains nothing until the exponent moves. (Only there:
+    // it is the costliest step of a trial.)
+    let contender = trial.evidence.admissible.is_ok()
+        || matches!(
+            select::judge(&parent.errors(), &trial.evidence),
+            None | Some(Decision::NearMiss)
+        );
     if !contender || last == 0 {
         return Ok(trial);
     }
@@ -574,7 +577,13 @@ impl Search<'_> {
                 .map(|(_, r)| r.clone())
                 .unwrap_or_default()
                 .into_iter()
-                .filter(|k| self.open(&rest.model).contains(k))
+                // Any rival not in the model, tied with another effect or not: an exchange is
+                // where a tie of the rounds before is settled.
+                .filter(|k| {
+                    !rest.model.has(*k)
+                        && (k.candidate().slot() != super::candidate::Slot::Lag
+                            || !rest.model.has_lag())
+                })
                 .collect();
             if rivals.is_empty() {
                 continue;
@@ -601,10 +610,17 @@ impl Search<'_> {
                             &t,
                             Decision::Ambiguous { with: old.kind },
                         ));
-                        self.found.ties.push(Tie {
-                            named: old.kind,
-                            alternative: t.effect,
-                        });
+                        if !self
+                            .found
+                            .ties
+                            .iter()
+                            .any(|x| x.named == old.kind && x.alternative.kind == t.effect.kind)
+                        {
+                            self.found.ties.push(Tie {
+                                named: old.kind,
+                                alternative: t.effect,
+                            });
+                        }
                         self.excluded.push(t.effect.kind);
                     }
                     select::Exchange::Keep => {}

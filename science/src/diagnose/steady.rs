@@ -184,6 +184,7 @@ pub(crate) fn report(s: &Signals, law: DragLaw, why: InputError) -> Report {
             cv_gain_percent: law.cv_gain_percent,
             gain: law.gain,
             lag_form: None,
+            lag_delay_s: None,
             explanation: kind.candidate().explanation(&e, law.exponent),
         });
     }

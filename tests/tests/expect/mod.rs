@@ -134,6 +134,27 @@ fn readings(r: &Report) -> Vec<Reading> {
             p,
         });
     }
+    // A second-order stage is, to first order in frequency, a lag of its low-frequency delay:
+    // the model that names one reads as the model with a torque lag of that delay too.
+    let stage = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectKind::SecondOrderLag)
+        .and_then(|e| e.lag_delay_s);
+    if let Some(delay) = stage {
+        let first = Reading {
+            effects: out[0]
+                .effects
+                .iter()
+                .map(|&(k, v)| match k {
+                    EffectKind::SecondOrderLag => (EffectKind::TorqueLag, delay),
+                    k => (k, v),
+                })
+                .collect(),
+            ..out[0].clone()
+        };
+        out.push(first);
+    }
     // A twin tie (a Coulomb friction and an offset on a rotor that never reverses) is the same
     // column under two names, at the same value: either name reads every model.
     let twins = r.ambiguities.iter().any(|a| {

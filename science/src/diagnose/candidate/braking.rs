@@ -19,7 +19,7 @@ use super::{EffectKind,
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot,
 };
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -149,7 +149,7 @@ impl Candidate for BrakingTorque {
     fn shape(&self) -> Shape {
         Shape::Slowing
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

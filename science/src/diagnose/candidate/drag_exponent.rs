@@ -6,7 +6,7 @@ use super::{EffectKind,
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot,
     LOW_SPEED_STEPS, RESOLVED,
 };
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -88,7 +88,7 @@ impl Candidate for DragExponent {
     fn shape(&self) -> Shape {
         Shape::SpeedLaw
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

@@ -12,7 +12,7 @@ use super::{EffectKind,
     admissible_lag, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, CHIRP_FOR_A_LAG,
 };
-use crate::diagnose::model::{At, Effect, LagForm, LagShape, Prepared, impulse_gain};
+use crate::diagnose::model::{At, Effect, LagForm, Lag, Prepared, impulse_gain};
 use crate::diagnose::select::consistent_equation_gain;
 use crate::diagnose::signals::{advanced, Signals};
 use crate::diagnose::tune::{golden, mse_of, Tuned, Tuner};
@@ -113,8 +113,11 @@ impl Candidate for ForceSensorLag {
     fn shape(&self) -> Shape {
         Shape::Lag
     }
-    fn lag_shape(&self, e: &Effect) -> Option<LagShape> {
-        Some(e.form.shape())
+    fn lag(&self, e: &Effect, value: f64) -> Option<Lag> {
+        Some(Lag {
+            shape: e.form.shape(),
+            delay: value,
+        })
     }
     fn revealing_run(&self) -> SeparatingRun {
         CHIRP_FOR_A_LAG

@@ -23,7 +23,7 @@
 use propid_io::tsv::{Row, Sample};
 use serde::Serialize;
 
-use super::model::{At, Effect, LagShape, Prepared};
+use super::model::{At, Effect, Lag, Prepared};
 use super::signals::Signals;
 use super::tune::{Tuned, Tuner};
 use super::SeparatingRun;
@@ -256,8 +256,9 @@ pub(crate) trait Candidate: Sync {
     fn explanation(&self, e: &Effect, value: f64) -> String;
     /// What it looks like (for the run that separates two effects).
     fn shape(&self) -> Shape;
-    /// For a lag, how it acts in form `e` (reported as `lag_form`); `None` for anything else.
-    fn lag_shape(&self, e: &Effect) -> Option<LagShape>;
+    /// For a lag of value `value`, how it acts in form `e` and its delay at low frequency;
+    /// `None` for anything else.
+    fn lag(&self, e: &Effect, value: f64) -> Option<Lag>;
     /// The `propid drive` run that shows it more clearly than data where it came close.
     fn revealing_run(&self) -> SeparatingRun;
     /// Whether the held-out simulation of the velocity can see it (a torque ripple far above

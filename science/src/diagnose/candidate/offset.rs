@@ -5,7 +5,7 @@ use super::{EffectKind,
     admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
     Slot, LOW_SPEED_STEPS,
 };
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -64,7 +64,7 @@ impl Candidate for ForceOffset {
     fn shape(&self) -> Shape {
         Shape::Constant { odd: false }
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

@@ -5,7 +5,7 @@
 
 use super::ripple::{admissible_amplitude, amplitude};
 use super::{EffectKind, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot};
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -71,7 +71,7 @@ impl Candidate for PeriodicDisturbance {
     fn shape(&self) -> Shape {
         Shape::Periodic
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

@@ -7,7 +7,7 @@ use super::{EffectKind,
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot, RESOLVED,
 };
 use crate::diagnose::engine::{fit_on_all, residuals};
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::structure::harmonic_correlations;
 use crate::diagnose::tune::{Tuned, Tuner};
@@ -121,7 +121,7 @@ impl Candidate for TorqueRipple {
     fn shape(&self) -> Shape {
         Shape::Periodic
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

@@ -16,7 +16,7 @@ use super::{EffectKind,
     lag_grid, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape, Slot,
     CHIRP_FOR_A_LAG, RESOLVED,
 };
-use crate::diagnose::model::{At, Effect, LagShape, Prepared, impulse_gain};
+use crate::diagnose::model::{At, Effect, Lag, LagShape, Prepared, impulse_gain};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -203,18 +203,25 @@ impl Candidate for SecondOrderLag {
         Some(EffectKind::TorqueLag)
     }
     fn tune(&self, t: &Tuner) -> Option<Tuned> {
-        // By its low-frequency delay d = 2ζ/ω_n first (what every pattern shows, tuned as a
-        // first-order lag is), then its damping at that delay (its shape, which only a chirp
-        // shows), then the delay again: along d the two parameters are nearly a ridge, which a
-        // search in (f_n, ζ) crawls along.
+        // By its low-frequency delay d = 2ζ/ω_n (what every pattern shows, and what the
+        // first-order lag it refines measured) and its damping (its shape, which only a chirp
+        // shows): in (f_n, ζ) the two are nearly a ridge. A grid around the lag's delay, then each
+        // refined in turn, twice.
         let at = |d: f64, zeta: f64| stage(t, zeta / (std::f64::consts::PI * d), zeta);
         let d = match t.seed {
-            // The first-order lag's length is the stage's delay to first order.
             Some(lag) => lag.param,
             None => delay(&t.grid_then_golden(&lag_grid(), |d| at(d, 0.7))?.0),
         };
-        let (shaped, _) = t.golden_around(0.2, 1.0, |z| at(d, z));
-        let (e, cv) = t.golden_around(d / 1.3, d * 1.3, |d| at(d, shaped.aux));
+        let grid = [0.8, 1.0, 1.25]
+            .into_iter()
+            .flat_map(|k| [0.35, 0.55, 0.75, 0.95].map(|z| at(k * d, z)));
+        let (mut e, mut cv) = t.best(grid)?;
+        for _ in 0..2 {
+            let d = delay(&e);
+            (e, _) = t.golden_around(d / 1.25, d * 1.25, |d| at(d, e.aux));
+            let d = delay(&e);
+            (e, cv) = t.golden_around((e.aux - 0.15).max(0.2), e.aux + 0.15, |z| at(d, z));
+        }
         Some((e, cv))
     }
     fn retune(&self, e: &Effect, t: &Tuner) -> Option<Tuned> {
@@ -254,8 +261,11 @@ impl Candidate for SecondOrderLag {
     fn shape(&self) -> Shape {
         Shape::Lag
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
-        Some(LagShape::SecondOrder)
+    fn lag(&self, e: &Effect, value: f64) -> Option<Lag> {
+        Some(Lag {
+            shape: LagShape::SecondOrder,
+            delay: e.aux / (std::f64::consts::PI * value),
+        })
     }
     fn revealing_run(&self) -> SeparatingRun {
         CHIRP_FOR_A_LAG

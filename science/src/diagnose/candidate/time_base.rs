@@ -9,7 +9,7 @@ use propid_io::tsv::{Row, Sample};
 use super::{EffectKind, 
     BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, RowEffect, Shape, Slot,
 };
-use crate::diagnose::model::{At, Effect, LagShape, Prepared};
+use crate::diagnose::model::{At, Effect, Lag, Prepared};
 use crate::diagnose::signals::Signals;
 use crate::diagnose::tune::{Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -130,7 +130,7 @@ impl Candidate for TimeBase {
     fn shape(&self) -> Shape {
         Shape::Clock
     }
-    fn lag_shape(&self, _: &Effect) -> Option<LagShape> {
+    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
         None
     }
     fn revealing_run(&self) -> SeparatingRun {

@@ -15,7 +15,7 @@ use super::{EffectKind,
     admissible_lag, lag_grid, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible,
     Shape, Slot, CHIRP_FOR_A_LAG,
 };
-use crate::diagnose::model::{At, Effect, LagForm, LagShape, Prepared, impulse_gain};
+use crate::diagnose::model::{At, Effect, LagForm, Lag, Prepared, impulse_gain};
 use crate::diagnose::signals::{first_order_lag, Signals};
 use crate::diagnose::tune::{mse_of, Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
@@ -92,8 +92,11 @@ impl Candidate for TorqueLag {
     fn shape(&self) -> Shape {
         Shape::Lag
     }
-    fn lag_shape(&self, e: &Effect) -> Option<LagShape> {
-        Some(e.form.shape())
+    fn lag(&self, e: &Effect, value: f64) -> Option<Lag> {
+        Some(Lag {
+            shape: e.form.shape(),
+            delay: value,
+        })
     }
     fn revealing_run(&self) -> SeparatingRun {
         CHIRP_FOR_A_LAG
