@@ -313,13 +313,14 @@ fn mechanisms_on_steps_are_named_and_measured() {
     assert_right(&hidden, &[Pattern::Steps]);
 }
 
-/// Below the threshold: a fast velocity observer (60–80 Hz) on the sine, and a held load cell
-/// in 1 kHz rows on the sine, lag by 1–3.5 ms, which one 0.5 Hz sinusoid hardly shows (held-out
-/// gains of 0.8–2.9 %, under the 3 % threshold; docs/SCIENCE.md). Where nothing is named, the
-/// report must list the effect as a near miss at the right value with the run that shows it (a
-/// chirp), and that run must name it alone; on the chirp it is named directly.
+/// A fast velocity observer (60–80 Hz) on the sine, and a held load cell in 1 kHz rows on the
+/// sine, lag by 1–3.5 ms, which one 0.5 Hz sinusoid hardly shows in the acceleration equation
+/// (held-out gains of 0.8–2.9 %). The simulated velocity shows it: the lag is named, or where the
+/// data cannot tell it from a constant torque, ambiguous with one; where nothing is named, the
+/// report lists it as a near miss at the right value with the run that shows it (a chirp), and
+/// that run names it alone. On the chirp it is named directly.
 #[test]
-fn below_the_threshold_a_near_miss_points_to_the_run_that_names_it() {
+fn a_lag_below_the_equations_threshold_is_named_or_pointed_to() {
     let mut failures: Vec<String> = DRAWS
         .iter()
         .flat_map(|&seed| {
@@ -337,24 +338,24 @@ fn below_the_threshold_a_near_miss_points_to_the_run_that_names_it() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 
-    // The route itself, on one draw where the sine names nothing (seed 1: a 69 Hz observer in
-    // 1 kHz rows): the near miss, its value, and its advice.
+    // One draw in detail (seed 1: a 69 Hz observer in 1 kHz rows): the acceleration equation
+    // gains 1.4 %, under the 3 % the selection asks, and the simulated velocity 97 %; the lag is
+    // named alone, at its value, and the text says so.
     let mut rng = StdRng::seed_from_u64(1);
     let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
     let s = Hidden::VelocityObserver.draw(&bench(rate, Pattern::Sine), &mut rng);
     let r = run(&s, Pattern::Sine, rng.random());
-    assert_eq!(r.verdict, Verdict::NothingWrong, "{}", describe(&r));
-    let m = near_miss_of(&s, &r).unwrap_or_else(|| panic!("no near miss: {}", describe(&r)));
-    assert_eq!(m.revealing_run.pattern, Drive::Chirp);
-    assert!(
-        m.cv_gain_percent >= 0.5 && m.cv_gain_percent < 3.0 && m.simulation_gain_percent > 0.0,
-        "{m:?}"
-    );
+    let bad = judge_scenario(&s, Pattern::Sine, &r);
+    assert!(bad.is_empty(), "{bad:?}: {}", describe(&r));
+    let lag = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectKind::TorqueLag)
+        .unwrap_or_else(|| panic!("not named: {}", describe(&r)));
+    assert!(lag.cv_gain_percent < 3.0, "{}", describe(&r));
     let text = propid_science::diagnose::to_text(&r, "observer.tsv");
     assert!(
-        text.contains("Nothing is named")
-            && text.contains("torque_lag = ")
-            && !text.contains("Nothing is wrong"),
+        text.contains("torque_lag: torque_lag = ") && !text.contains("Nothing is wrong"),
         "{text}"
     );
 }
