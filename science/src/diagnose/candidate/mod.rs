@@ -81,6 +81,11 @@ pub enum Inadmissible {
         /// The value.
         value: f64,
     },
+    /// A parameter sits on the bound of its search: the data do not place it.
+    OnBound {
+        /// The parameter's value.
+        value: f64,
+    },
 }
 
 impl std::fmt::Display for Inadmissible {
@@ -99,6 +104,10 @@ impl std::fmt::Display for Inadmissible {
             Inadmissible::OutOfRange { value } => {
                 write!(f, "{value:.4e} is outside the range the mechanism can have")
             }
+            Inadmissible::OnBound { value } => write!(
+                f,
+                "a parameter sits on the bound of its search ({value:.3}): the data do not place it"
+            ),
         }
     }
 }

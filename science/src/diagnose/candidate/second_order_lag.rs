@@ -24,6 +24,10 @@ use crate::diagnose::SeparatingRun;
 /// See the module documentation.
 pub(crate) struct SecondOrderLag;
 
+/// The lightest damping searched: a stage tuned to it is on the search's bound (a resonance the
+/// data do not place, fitting an amplitude error at the excitation's frequency instead).
+const LIGHTEST: f64 = 0.2;
+
 /// Highest natural frequency taken for a second-order stage [Hz]: above, the stage is a delay
 /// of a few milliseconds over the band a stand excites (0.5–5 Hz), which a first-order lag
 /// describes as well.
@@ -220,7 +224,7 @@ impl Candidate for SecondOrderLag {
             let d = delay(&e);
             (e, _) = t.golden_around(d / 1.25, d * 1.25, |d| at(d, e.aux));
             let d = delay(&e);
-            (e, cv) = t.golden_around((e.aux - 0.15).max(0.2), e.aux + 0.15, |z| at(d, z));
+            (e, cv) = t.golden_around((e.aux - 0.15).max(LIGHTEST), e.aux + 0.15, |z| at(d, z));
         }
         Some((e, cv))
     }
@@ -233,8 +237,11 @@ impl Candidate for SecondOrderLag {
     fn estimate(&self, e: &Effect, f: &Fitted) -> Estimate {
         Estimate::new(e.param, (f.profile)())
     }
-    fn admissible(&self, _: &Effect, v: Estimate, _: &Fitted) -> Result<(), Inadmissible> {
+    fn admissible(&self, e: &Effect, v: Estimate, _: &Fitted) -> Result<(), Inadmissible> {
         let top = TOP;
+        if e.aux <= LIGHTEST * 1.05 {
+            return Err(Inadmissible::OnBound { value: e.aux });
+        }
         if !v.value.is_finite() {
             Err(Inadmissible::NotFinite)
         } else if v.value <= 0.0 {
