@@ -9,7 +9,8 @@
 //!  propid-transport  CanTransport: SLCAN (all OSes), SocketCAN (Linux), memory bus
 //!  propid-io         the TSV sample stream, importers, candump logs
 //!  propid-science    excitation, stand simulators, fit, diagnosis
-//!  propid-drive      the driver and the simulated Telega
+//!  propid-drive-proto  the driver, the simulated Telega, the register client: Sans-IO machines
+//!  propid-drive-host   those machines on a real bus and clock, recording to files; the live view's model
 //!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
 //!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
 //! ```

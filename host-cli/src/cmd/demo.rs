@@ -17,10 +17,13 @@ use anyhow::Context;
 use propid_core::dsdl::Readiness;
 use propid_transport::CanTransport;
 
-use propid_drive::drive::{run_drive, DriveConfig};
-use propid_drive::realtime::SystemClock;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
-use propid_drive::StopReason;
+use propid_drive_host::drive::run_drive;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::DriveConfig;
+use propid_drive_proto::sim_drive::SimDriveConfig;
+use propid_drive_proto::StopReason;
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
@@ -73,21 +76,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         init_duration: args.init_duration,
         pattern: args.pattern,
     };
+    let played = Played::try_from(excitation).map_err(|e| {
+        // The demo's own flags: --duration and --init-duration.
+        use propid_drive_host::stand::ScheduleError;
+        crate::InputError(match e {
+            ScheduleError::Duration(e) => format!("--duration {e}"),
+            ScheduleError::InitDuration(e) => format!("--init-duration {e}"),
+            e => e.to_string(),
+        })
+    })?;
     let cfg = DriveConfig {
         fit: true,
-        ..DriveConfig::example(excitation)
+        ..DriveConfig::example(played)
     };
-    cfg.validate().map_err(|e| {
-        // The demo's own flags: --duration and --init-duration.
-        let e = crate::cmd::drive::flag_error(e);
-        crate::InputError(
-            e.0.replace(
-                "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
-                "--duration",
-            )
-            .replace(" (register init_duration, INIT_DURATION)", ""),
-        )
-    })?;
     let (mut transport, mut telega_end, pty) = link()?;
     eprintln!(
         "demo: simulated Telega (J = {:.2e} kg·m², c2 = {:.2e}, hidden torque lag {} ms) and the driver talk SLCAN over {pty}",
@@ -95,11 +96,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand.c2,
         stand.torque_lag * 1e3
     );
-    let sim_cfg = SimDriveConfig::example(stand, args.seed);
+    let plant = StandPlant::boxed(stand, args.seed)?;
     let stop_sim = Arc::new(AtomicBool::new(false));
     let telega = {
         let stop = Arc::clone(&stop_sim);
-        std::thread::spawn(move || run_sim_drive(sim_cfg, telega_end.as_mut(), &SystemClock, &stop))
+        let cfg = SimDriveConfig::example();
+        std::thread::spawn(move || {
+            run_sim_drive(cfg, plant, telega_end.as_mut(), &SystemClock, &stop)
+        })
     };
     let tsv = args.out.join("run.tsv");
     let mut file =
@@ -111,7 +115,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         args.live.as_deref(),
         args.live_allow_remote,
         &stop,
-        excitation,
+        played,
         "propid demo",
     )?;
     let outcome = run_drive(

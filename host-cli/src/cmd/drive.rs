@@ -1,5 +1,5 @@
 //! `propid drive`: argument parsing, the signal handlers, progress lines and exit codes around
-//! [`propid_drive::drive::run_drive`].
+//! [`propid_drive_host::drive::run_drive`].
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -7,14 +7,19 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anyhow::Context;
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::{Mtu, NodeId, SubjectId};
 use propid_core::dsdl::Value;
-use propid_drive::drive::{
-    run_drive_machine, ConfigError, Drive, DriveConfig, DriveEvent, Progress,
+use propid_drive_host::drive::run_drive_machine;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::register_file::{self, parse_text, render_file};
+use propid_drive_host::stand::Played;
+use propid_drive_proto::drive::{drive_registers, Drive, DriveConfig, DriveEvent, Progress};
+use propid_drive_proto::excitation::Schedule;
+use propid_drive_proto::registers::{self, subject_register};
+use propid_drive_proto::settings::{
+    Deadman, InitDuration, PatternDuration, Period, RelativeError, SetpointPeriod, SetpointRange,
 };
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers::{self, HostRegistry};
-use propid_drive::StopReason;
+use propid_drive_proto::{HostRegistry, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
 use crate::InputError;
@@ -134,9 +139,27 @@ impl Args {
                     path.display()
                 ))
             })?;
-            registers::apply_file(&mut r, path, &text).map_err(|e| InputError(e.0))?;
+            let (entries, errors) = register_file::read_entries(&text);
+            if let Some(e) = errors.first() {
+                return Err(InputError(format!("{}:{}: {e}", path.display(), e.line)));
+            }
+            for e in entries {
+                let origin = format!("{}:{}", path.display(), e.line);
+                set_text(&mut r, &e.name, &e.value, &origin)?;
+            }
         }
-        registers::apply_environment(&mut r, vars).map_err(|e| InputError(e.0))?;
+        let vars: Vec<(String, String)> = vars.into_iter().collect();
+        let names: Vec<String> = r
+            .iter()
+            .filter(|x| x.mutable)
+            .filter_map(|x| x.name.as_str().map(String::from))
+            .collect();
+        for name in names {
+            let var = registers::environment_name(&name);
+            if let Some((_, value)) = vars.iter().find(|(k, _)| *k == var) {
+                set_text(&mut r, &name, value, &format!("environment variable {var}"))?;
+            }
+        }
         let mut set = |name: &str, v: Option<Value>| {
             if let Some(v) = v {
                 // The flags are typed: the conversion to the register's type cannot fail.
@@ -178,44 +201,68 @@ impl Args {
     ) -> Result<(DriveConfig, HostRegistry), InputError> {
         let r = self.registers(vars)?;
         let until_rel_stderr = match self.until_stderr {
-            Some(p) if p > 0.0 && p < 100.0 => Some(p / 100.0),
-            Some(p) => {
-                return Err(InputError(format!(
+            Some(p) => Some(RelativeError::new(p / 100.0).map_err(|_| {
+                InputError(format!(
                     "--until-stderr must be a percentage in (0, 100) (got {p})"
-                )))
-            }
+                ))
+            })?),
             None => None,
         };
-        let mut cfg = DriveConfig::example(Excitation {
-            lo: 0.1,
-            hi: 0.9,
-            period: 2.0,
-            duration: 200.0,
-            init_duration: 5.0,
-            pattern: self.pattern,
-        });
-        cfg.mtu = self.bus.mtu;
-        cfg.deadman = self.deadman;
-        cfg.drive_node_id = self.drive_node_id;
-        cfg.fit = self.fit || until_rel_stderr.is_some();
-        cfg.until_rel_stderr = until_rel_stderr;
-        let mut with_ids = r.clone();
-        if self.from_telega.is_some() {
-            // The port-IDs come from the drive later: check everything else now, before anything
-            // is sent.
-            for name in [registers::DRIVE_SETPOINT_ID, registers::DRIVE_FEEDBACK_ID] {
-                if with_ids.get(name).and_then(|x| x.value.float_at(0))
-                    == Some(f64::from(registers::UNSET))
-                {
-                    let _ = with_ids.set(name, &n16(0));
-                }
+        let first = |name: &str| r.get(name).and_then(|x| x.value.float_at(0));
+        let number = |name: &'static str| first(name).unwrap_or(f64::NAN);
+        let node_id = match first(registers::NODE_ID) {
+            Some(v) if v < f64::from(registers::UNSET) => {
+                Some(NodeId::try_from(v as u64).map_err(|e| flag_error(registers::NODE_ID, e))?)
             }
+            _ => None,
         }
-        registers::apply_drive_registers(&with_ids, &mut cfg).map_err(flag_error)?;
-        if let Some(path) = &self.pattern_file {
-            cfg.excitation = crate::cmd::sim::read_pattern_file(path)?;
-        }
-        cfg.validate().map_err(flag_error)?;
+        .ok_or_else(|| flag_error(registers::NODE_ID, "is not set"))?;
+        let port = |name: &'static str, required: bool| match subject_register(&r, name)
+            .map_err(|e| flag_error(name, e))?
+        {
+            None if required && self.from_telega.is_none() => Err(flag_error(name, "is not set")),
+            id => Ok(id),
+        };
+        let setpoint_id = port(registers::DRIVE_SETPOINT_ID, true)?;
+        let feedback_id = port(registers::DRIVE_FEEDBACK_ID, true)?;
+        let readiness_id = port(registers::DRIVE_READINESS_ID, false)?;
+        let lohi = r.get(registers::SETPOINT_RAT_LO_HI).map(|x| &x.value);
+        let (lo, hi) = (
+            lohi.and_then(|v| v.float_at(0)).unwrap_or(f64::NAN),
+            lohi.and_then(|v| v.float_at(1)).unwrap_or(f64::NAN),
+        );
+        let schedule = Schedule {
+            range: SetpointRange::new(lo, hi)
+                .map_err(|e| flag_error(registers::SETPOINT_RAT_LO_HI, e))?,
+            period: Period::new(number(registers::PERIOD))
+                .map_err(|e| flag_error(registers::PERIOD, e))?,
+            duration: PatternDuration::new(number(registers::PATTERN_DURATION))
+                .map_err(|e| flag_error(registers::PATTERN_DURATION, e))?,
+            init_duration: InitDuration::new(number(registers::INIT_DURATION))
+                .map_err(|e| flag_error(registers::INIT_DURATION, e))?,
+        };
+        let played = match &self.pattern_file {
+            Some(path) => Played::try_from(crate::cmd::sim::read_pattern_file(path)?)
+                .map_err(|e| InputError(format!("{}: {e}", path.display())))?,
+            None => Played::new(schedule, self.pattern),
+        };
+        let cfg = DriveConfig {
+            node_id,
+            mtu: Mtu::from_bytes(self.bus.mtu).ok_or_else(|| {
+                InputError(format!("--mtu must be 8 or 64 (got {})", self.bus.mtu))
+            })?,
+            readiness_id,
+            // Zero until --from-telega reads the drive's.
+            setpoint_id: setpoint_id.unwrap_or(SubjectId::from_const(0)),
+            feedback_id: feedback_id.unwrap_or(SubjectId::from_const(0)),
+            drive_node_id: self.drive_node_id,
+            excitation: std::sync::Arc::new(played),
+            setpoint_period: SetpointPeriod::new(number(registers::SETPOINT_PERIOD))
+                .map_err(|e| flag_error(registers::SETPOINT_PERIOD, e))?,
+            deadman: Deadman::new(self.deadman).map_err(|e| flag_error("deadman", e))?,
+            fit: self.fit || until_rel_stderr.is_some(),
+            until_rel_stderr,
+        };
         Ok((cfg, r))
     }
 
@@ -225,41 +272,45 @@ impl Args {
     }
 }
 
+/// Sets one register from text; the error names `origin`.
+fn set_text(r: &mut HostRegistry, name: &str, text: &str, origin: &str) -> Result<(), InputError> {
+    let current = r
+        .get(name)
+        .ok_or_else(|| InputError(format!("{origin}: no register named {name}")))?;
+    let value = parse_text(&current.value, text).ok_or_else(|| {
+        InputError(format!(
+            "{origin}: `{text}` is not a valid {} for register {name}",
+            registers::describe(&current.value)
+        ))
+    })?;
+    r.set(name, &value)
+        .map_err(|e| InputError(format!("{origin}: {name}: {e}")))
+}
+
 /// A configuration error in the words of the command line: the flag, the register and its
 /// environment variable, and what is wrong.
-pub fn flag_error(e: ConfigError) -> InputError {
-    let (flag, register) = match e.setting {
-        "node_id" | "uavcan.node.id" => ("--node-id", Some("uavcan.node.id")),
-        "setpoint_id" | registers::DRIVE_SETPOINT_ID => {
-            ("--setpoint-id", Some(registers::DRIVE_SETPOINT_ID))
+pub fn flag_error(setting: &str, problem: impl ToString) -> InputError {
+    let problem = problem.to_string();
+    let (flag, register) = match setting {
+        registers::NODE_ID => ("--node-id", Some(registers::NODE_ID)),
+        registers::DRIVE_SETPOINT_ID => ("--setpoint-id", Some(registers::DRIVE_SETPOINT_ID)),
+        registers::DRIVE_FEEDBACK_ID => ("--feedback-id", Some(registers::DRIVE_FEEDBACK_ID)),
+        registers::DRIVE_READINESS_ID => ("--readiness-id", Some(registers::DRIVE_READINESS_ID)),
+        registers::SETPOINT_RAT_LO_HI => {
+            ("--setpoint-rat-lo-hi", Some(registers::SETPOINT_RAT_LO_HI))
         }
-        "feedback_id" | registers::DRIVE_FEEDBACK_ID => {
-            ("--feedback-id", Some(registers::DRIVE_FEEDBACK_ID))
-        }
-        "readiness_id" | registers::DRIVE_READINESS_ID => {
-            ("--readiness-id", Some(registers::DRIVE_READINESS_ID))
-        }
-        "setpoint_lo" | "setpoint_hi" | "setpoint_rat_lo_hi" => {
-            ("--setpoint-rat-lo-hi", Some("setpoint_rat_lo_hi"))
-        }
-        "period" => ("--period", Some("period")),
-        "pattern_duration" => ("--pattern-duration", Some("pattern_duration")),
-        "init_duration" => ("--init-duration", Some("init_duration")),
-        "setpoint_period" => ("--setpoint-period", Some("setpoint_period")),
-        "deadman" => ("--deadman", None),
-        "drive_node_id" => ("--drive-node-id", None),
-        "mtu" => ("--mtu", None),
-        "interval" => ("--interval", None),
-        "duration" => ("--duration", None),
-        other => return InputError(format!("{other}: {}", e.problem)),
+        registers::PERIOD => ("--period", Some(registers::PERIOD)),
+        registers::PATTERN_DURATION => ("--pattern-duration", Some(registers::PATTERN_DURATION)),
+        registers::INIT_DURATION => ("--init-duration", Some(registers::INIT_DURATION)),
+        registers::SETPOINT_PERIOD => ("--setpoint-period", Some(registers::SETPOINT_PERIOD)),
+        other => return InputError(format!("--{} {problem}", other.replace('_', "-"))),
     };
     match register {
         Some(reg) => InputError(format!(
-            "{flag} (register {reg}, {}) {}",
-            registers::environment_name(reg),
-            e.problem
+            "{flag} (register {reg}, {}) {problem}",
+            registers::environment_name(reg)
         )),
-        None => InputError(format!("{flag} {}", e.problem)),
+        None => InputError(format!("{flag} {problem}")),
     }
 }
 
@@ -327,7 +378,7 @@ fn save_written(
         return;
     };
     let _ = regs.set(name, value);
-    match std::fs::write(path, registers::render_file(regs)) {
+    match std::fs::write(path, render_file(regs)) {
         Ok(()) => eprintln!(
             "drive: register {name} written over the bus: {shown}, saved to {} for the next run",
             path.display()
@@ -343,7 +394,7 @@ fn save_written(
 pub fn run(args: Args) -> anyhow::Result<()> {
     let (mut cfg, mut file_registers) = args.config()?;
     if args.show_registers {
-        print!("{}", registers::render_file(&file_registers));
+        print!("{}", render_file(&file_registers));
         return Ok(());
     }
     let mut transport = args.bus.open()?;
@@ -398,7 +449,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         );
     }
     // What the node serves: the run's values, and the text registers as given.
-    let mut served = registers::drive_registers(&cfg, args.registers.is_some());
+    let mut served = drive_registers(&cfg, args.registers.is_some());
     if let Some(d) = file_registers.get("uavcan.node.description") {
         let _ = served.set("uavcan.node.description", &d.value.clone());
     }
@@ -411,20 +462,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ),
         None => Box::new(std::io::stdout()),
     };
-    let excitation = cfg.excitation;
+    let played = played_of(&args, &cfg)?;
+    let excitation = *played.excitation();
     let readiness = cfg.readiness_id.is_some();
     let fit = cfg.fit;
     let mut live = crate::live::start_for_drive(
         args.live.as_deref(),
         args.live_allow_remote,
         &stop,
-        excitation,
+        played,
         "propid drive",
     )?;
     let drive = Drive::with_registers(
         cfg,
         &served,
-        propid_drive::realtime::Clock::now(&SystemClock),
+        propid_drive_host::realtime::Clock::now(&SystemClock),
     );
     let outcome = run_drive_machine(
         drive,
@@ -483,5 +535,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
         StopReason::Signal => std::process::exit(130),
         reason => anyhow::bail!("{reason}"),
+    }
+}
+
+/// What `cfg` plays, as the science describes it (for the progress lines and the live page).
+fn played_of(args: &Args, cfg: &DriveConfig) -> Result<Played, InputError> {
+    match &args.pattern_file {
+        Some(path) => Played::try_from(crate::cmd::sim::read_pattern_file(path)?)
+            .map_err(|e| InputError(format!("{}: {e}", path.display()))),
+        None => Ok(Played::new(cfg.excitation.schedule(), args.pattern)),
     }
 }

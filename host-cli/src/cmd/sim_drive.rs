@@ -1,15 +1,17 @@
 //! `propid sim-drive`: a simulated Telega on a CAN interface, around
-//! [`propid_drive::sim_drive::run_sim_drive`].
+//! [`propid_drive_host::sim_drive::run_sim_drive`].
 
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::{Mtu, NodeId, SubjectId};
 use propid_core::dsdl::Readiness;
-use propid_drive::realtime::Clock;
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers;
-use propid_drive::sim_drive::{run_sim_drive_machine, SimDrive, SimDriveConfig, SimDriveEvent};
+use propid_drive_host::realtime::{Clock, SystemClock};
+use propid_drive_host::sim_drive::run_sim_drive_machine;
+use propid_drive_host::stand::StandPlant;
+use propid_drive_proto::registers;
+use propid_drive_proto::settings::{FeedbackInterval, RunLimit};
+use propid_drive_proto::sim_drive::{sim_drive_registers, SimDrive, SimDriveConfig, SimDriveEvent};
 
 use crate::cmd::sim::StandArgs;
 
@@ -57,18 +59,22 @@ fn readiness_name(v: u8) -> &'static str {
 
 /// Runs `propid sim-drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let flag = crate::cmd::drive::flag_error;
     let cfg = SimDriveConfig {
         node_id: args.node_id,
-        mtu: args.bus.mtu,
+        mtu: Mtu::from_bytes(args.bus.mtu)
+            .ok_or_else(|| flag("mtu", format!("must be 8 or 64 (got {})", args.bus.mtu)))?,
         readiness_id: args.readiness_id,
         setpoint_id: args.setpoint_id,
         feedback_id: args.feedback_id,
-        interval: args.interval,
-        duration: args.duration,
-        stand: args.stand.config()?,
-        seed: args.stand.seed,
+        interval: FeedbackInterval::new(args.interval)
+            .map_err(|e| flag("interval", e.to_string()))?,
+        duration: match args.duration {
+            0.0 => None,
+            d => Some(RunLimit::new(d).map_err(|e| flag("duration", e.to_string()))?),
+        },
     };
-    cfg.validate().map_err(crate::cmd::drive::flag_error)?;
+    let plant = StandPlant::boxed(args.stand.config()?, args.stand.seed)?;
     let mut transport = args.bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     crate::signals::install(&stop)?;
@@ -78,8 +84,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         transport.name(),
         cfg.feedback_id
     );
-    let regs = registers::sim_drive_registers(&cfg, args.local_timestamp);
-    let sim = SimDrive::with_registers(cfg, &regs, SystemClock.now());
+    let regs = sim_drive_registers(&cfg, args.local_timestamp);
+    let sim = SimDrive::with_registers(cfg, plant, &regs, SystemClock.now());
     let summary =
         run_sim_drive_machine(
             sim,

@@ -1,15 +1,16 @@
 //! `propid telega`: find drives on the bus, read their registers, check the seed's prerequisites
 //! (feedback at ≥ 100 Hz, local timestamps on), fix them when asked and store them when asked;
-//! a thin command over [`propid_drive::telega::BlockingClient`].
+//! a thin command over [`propid_drive_host::telega::BlockingClient`].
 
 use std::time::Duration;
 
 use anyhow::bail;
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::{Mtu, NodeId, SubjectId};
 use propid_core::dsdl::{ExecuteCommandRequest, ExecuteCommandResponse, Value};
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers::{self, check_prerequisites, Problem};
-use propid_drive::telega::BlockingClient;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::register_file::parse_text;
+use propid_drive_host::telega::BlockingClient;
+use propid_drive_proto::registers::{self, check_prerequisites, Problem};
 use propid_transport::CanTransport;
 
 use crate::InputError;
@@ -67,7 +68,12 @@ fn write(
     if !current.mutable {
         bail!("drive {drive}: {name} is read-only");
     }
-    let value = registers::parse_for(&current.value, name, text, "--set")?;
+    let value = parse_text(&current.value, text).ok_or_else(|| {
+        InputError(format!(
+            "--set: `{text}` is not a valid {} for register {name}",
+            registers::describe(&current.value)
+        ))
+    })?;
     let after = client
         .access(drive, name, value.clone())
         .map_err(client_err)?
@@ -118,7 +124,7 @@ fn subject(found: &[(String, Value)], name: &str) -> Option<SubjectId> {
 pub fn drive_ports(
     transport: &mut dyn CanTransport,
     node_id: NodeId,
-    mtu: usize,
+    mtu: Mtu,
     drive: NodeId,
 ) -> anyhow::Result<DrivePorts> {
     let mut client = BlockingClient::new(transport, &SystemClock, node_id, mtu);
@@ -143,7 +149,7 @@ pub fn drive_ports(
 }
 
 fn registers_checked_and_ports() -> Vec<&'static str> {
-    let mut v = propid_drive::telega::CHECKED_REGISTERS.to_vec();
+    let mut v = propid_drive_proto::telega::CHECKED_REGISTERS.to_vec();
     v.extend([
         registers::TELEGA_SETPOINT_ID,
         registers::TELEGA_READINESS_ID,
@@ -176,9 +182,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         ))
         .into());
     }
+    let mtu = Mtu::from_bytes(args.bus.mtu)
+        .ok_or_else(|| InputError(format!("--mtu must be 8 or 64 (got {})", args.bus.mtu)))?;
     let mut transport = args.bus.open()?;
-    let mut client =
-        BlockingClient::new(transport.as_mut(), &SystemClock, args.node_id, args.bus.mtu);
+    let mut client = BlockingClient::new(transport.as_mut(), &SystemClock, args.node_id, mtu);
     let heard = client
         .discover(Duration::from_secs_f64(args.listen))
         .map_err(client_err)?;
