@@ -94,35 +94,40 @@ impl DriveConfig {
     }
 }
 
-/// The drive's registers holding `cfg`'s values (what the node serves while it drives).
+/// The drive's registers holding `cfg`'s values (what the node serves while it drives). Every
+/// field is named: one added to [`DriveConfig`] does not compile here until it is served or said
+/// not to be a register.
 pub fn drive_registers(cfg: &DriveConfig, persistent: bool) -> HostRegistry {
+    let DriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        drive_node_id: _,
+        excitation,
+        setpoint_period,
+        deadman: _,
+        fit: _,
+        until_rel_stderr: _,
+    } = cfg;
     let mut r = registers::drive_defaults(persistent);
-    let s = cfg.excitation.schedule();
+    let s = excitation.schedule();
     let set = |r: &mut HostRegistry, name: &str, v: Value| {
         // The names are the defaults' and the types match them: cannot fail.
         let _ = r.set(name, &v);
     };
-    set(&mut r, NODE_ID, n16(Some(u16::from(cfg.node_id.get()))));
-    set(
-        &mut r,
-        SETPOINT_RAT_LO_HI,
-        real64(&[s.range.lo(), s.range.hi()]),
-    );
+    set(&mut r, NODE_ID, n16(Some(u16::from(node_id.get()))));
+    let range = [s.range.lo(), s.range.hi()];
+    set(&mut r, SETPOINT_RAT_LO_HI, real64(&range));
     set(&mut r, PERIOD, real64(&[s.period.get()]));
     set(&mut r, PATTERN_DURATION, real64(&[s.duration.get()]));
     set(&mut r, INIT_DURATION, real64(&[s.init_duration.get()]));
-    set(
-        &mut r,
-        SETPOINT_PERIOD,
-        real64(&[cfg.setpoint_period.get()]),
-    );
-    set(
-        &mut r,
-        DRIVE_READINESS_ID,
-        n16(cfg.readiness_id.map(SubjectId::get)),
-    );
-    set(&mut r, DRIVE_SETPOINT_ID, n16(Some(cfg.setpoint_id.get())));
-    set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(cfg.feedback_id.get())));
+    set(&mut r, SETPOINT_PERIOD, real64(&[setpoint_period.get()]));
+    let readiness = n16(readiness_id.map(SubjectId::get));
+    set(&mut r, DRIVE_READINESS_ID, readiness);
+    set(&mut r, DRIVE_SETPOINT_ID, n16(Some(setpoint_id.get())));
+    set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(feedback_id.get())));
     r
 }
 

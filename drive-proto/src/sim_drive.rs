@@ -78,18 +78,29 @@ impl SimDriveConfig {
 
 /// The simulated Telega's registers for `cfg`, with local timestamps on or off.
 pub fn sim_drive_registers(cfg: &SimDriveConfig, local_timestamp: bool) -> HostRegistry {
+    // Every field named: one added to SimDriveConfig does not compile here until it is served or
+    // said not to be a register.
+    let SimDriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        interval,
+        duration: _,
+    } = cfg;
     let mut r = HostRegistry::new();
-    let node_id = n16(Some(u16::from(cfg.node_id.get())));
+    let node_id = n16(Some(u16::from(node_id.get())));
     add(&mut r, NODE_ID, node_id, true, true);
     add(&mut r, NODE_DESCRIPTION, text(""), true, true);
-    let interval = Value::real32(&[cfg.interval.get() as f32]).unwrap_or_default();
+    let interval = Value::real32(&[interval.get() as f32]).unwrap_or_default();
     add(&mut r, PUB_INTERVAL_MIN, interval, true, true);
     let ts = Value::bit(&[local_timestamp]).unwrap_or_default();
     add(&mut r, LOCAL_TIMESTAMP, ts, true, true);
     let deadman = Value::real32(&[SIM_DEADMAN.as_secs_f32()]).unwrap_or_default();
     add(&mut r, DEADMAN_TIMEOUT, deadman, false, true);
-    let (feedback, setpoint) = (cfg.feedback_id.get(), cfg.setpoint_id.get());
-    let readiness = cfg.readiness_id.map(SubjectId::get);
+    let (feedback, setpoint) = (feedback_id.get(), setpoint_id.get());
+    let readiness = readiness_id.map(SubjectId::get);
     port(
         &mut r,
         "pub",

@@ -12,7 +12,9 @@
 //!  propid-drive-proto  the driver, the simulated Telega, the register client: Sans-IO machines
 //!  propid-drive-host   those machines on a real bus and clock, recording to files; the live view's model
 //!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
-//!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
+//!  propid (here)     run(args): the command line as a function (main.rs is one call to it)
+//!                    settings: each setting a type (flag, register, variable, parse); raw → checked
+//!                    cmd::* — one module per subcommand: its settings → library call → output
 //! ```
 #![deny(missing_docs)]
 
