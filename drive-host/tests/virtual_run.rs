@@ -6,11 +6,11 @@ use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
-use propid_core::sample::{Row, Sample};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
 use propid_drive_host::stand::{Played, StandPlant};
 use propid_drive_proto::drive::{
-    Drive, DriveConfig, DriveEvent, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
+    Drive, DriveConfig, DriveEvent, FeedbackRow, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
 };
 use propid_drive_proto::plant::Plant;
 use propid_drive_proto::settings::{Deadman, RelativeError};
@@ -44,7 +44,7 @@ fn stand() -> Box<dyn Plant> {
 /// Everything a run produced.
 #[derive(Default)]
 struct Run {
-    rows: Vec<Row>,
+    rows: Vec<FeedbackRow>,
     /// (time [µs], event) of phase events.
     phases: Vec<(u64, &'static str)>,
     report: Option<StopReport>,

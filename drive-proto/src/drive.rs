@@ -23,7 +23,7 @@ use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Value, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig, TxStats};
-use propid_core::sample::{Row, Sample};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
 
 use crate::excitation::Excitation;
@@ -214,13 +214,22 @@ impl StopReport {
     }
 }
 
+/// One feedback message as the drive received it: a row of the recording.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedbackRow {
+    /// When it arrived, on the caller's clock [s] (the TSV's `ts_local`).
+    pub ts_local: f64,
+    /// What it says (time from the drive's own timestamp).
+    pub sample: Sample,
+}
+
 /// What the drive reports while it runs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DriveEvent {
     /// The init phase is over and recording begins.
     PatternStarted,
     /// One feedback row: write it (and flush it) before the next.
-    Row(Row),
+    Row(FeedbackRow),
     /// Once a second during the pattern.
     Progress(Progress),
     /// The stop sequence began (STANDBY is first in line).
@@ -680,7 +689,7 @@ impl Drive {
                 self.recent.pop_front();
             }
             self.recent.push_back(sample);
-            self.events.push_back(DriveEvent::Row(Row {
+            self.events.push_back(DriveEvent::Row(FeedbackRow {
                 ts_local: timestamp.as_secs_f64(),
                 sample,
             }));
