@@ -13,15 +13,17 @@ use crate::cmd;
 /// Identify the dynamics of a propeller or fan on a Zubax Telega drive over Cyphal/CAN.
 #[derive(Parser)]
 #[command(name = "propid", version, about, long_about = None)]
-struct Cli {
+pub struct Cli {
+    /// The subcommand.
     #[command(subcommand)]
-    command: Command,
+    pub command: Command,
 }
 
+/// The subcommands.
 // Parsed once per process; the arguments' sizes do not matter.
 #[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
-enum Command {
+pub enum Command {
     /// Drive a Telega over Cyphal/CAN with the identification pattern and record its feedback as TSV.
     Drive(cmd::drive::Args),
     /// Fit inertia and drag (m, c1, c2) to a recorded TSV, like the seed regressor but exact.
@@ -47,32 +49,44 @@ enum Command {
     Demo(cmd::demo::Args),
 }
 
-/// Runs `propid` with `args` (the program's name first, as `std::env::args_os` gives them):
-/// help and usage errors as clap prints them (exit 0 or 2), a command's error on stderr as
-/// `error: …` with its exit status ([`crate::exit_status_for`]), 130 after an interruption.
-pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> ExitCode {
+impl Cli {
+    /// Runs the parsed command.
+    pub fn run(self) -> anyhow::Result<()> {
+        match self.command {
+            Command::Drive(a) => cmd::drive::run(a),
+            Command::Fit(a) => cmd::fit::run(a),
+            Command::Sim(a) => cmd::sim::run(a),
+            Command::Diagnose(a) => cmd::diagnose::run(a),
+            Command::Import(c) => cmd::import::run(c),
+            Command::SimDrive(a) => cmd::sim_drive::run(a),
+            Command::Replay(a) => cmd::replay::run(a),
+            Command::Plan(a) => cmd::plan::run(a),
+            Command::Report(a) => cmd::report::run(a),
+            Command::Demo(a) => cmd::demo::run(a),
+            Command::Telega(a) => cmd::telega::run(a),
+        }
+    }
+}
+
+/// Runs the command line `args` (the program's name first, as `std::env::args_os` gives them)
+/// as `main` does and returns the exit status: help and usage errors as clap prints them (0 or
+/// 2), a command's error on stderr as `error: …` with [`crate::exit_status_for`]'s status (1
+/// failed, 2 bad input, 3 cannot judge), 130 after an interruption (said already).
+pub fn exit_status<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
+            // --help and --version print on stdout and exit 0; usage errors on stderr, 2.
             let _ = e.print();
-            return ExitCode::from(e.exit_code().clamp(0, 255) as u8);
+            return u8::try_from(e.exit_code()).unwrap_or(2);
         }
     };
-    let result = match cli.command {
-        Command::Drive(a) => cmd::drive::run(a),
-        Command::Fit(a) => cmd::fit::run(a),
-        Command::Sim(a) => cmd::sim::run(a),
-        Command::Diagnose(a) => cmd::diagnose::run(a),
-        Command::Import(c) => cmd::import::run(c),
-        Command::SimDrive(a) => cmd::sim_drive::run(a),
-        Command::Replay(a) => cmd::replay::run(a),
-        Command::Plan(a) => cmd::plan::run(a),
-        Command::Report(a) => cmd::report::run(a),
-        Command::Demo(a) => cmd::demo::run(a),
-        Command::Telega(a) => cmd::telega::run(a),
-    };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
+    match cli.run() {
+        Ok(()) => 0,
         // The reader of our output went away (`propid sim | head`): not an error.
         Err(err)
             if err.chain().any(|e| {
@@ -80,15 +94,24 @@ pub fn run(args: impl IntoIterator<Item = impl Into<OsString> + Clone>) -> ExitC
                     .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe)
             }) =>
         {
-            ExitCode::SUCCESS
+            0
         }
         // Said already (the drive's stop line); the shell's convention for SIGINT.
-        Err(err) if err.downcast_ref::<crate::Interrupted>().is_some() => ExitCode::from(130),
+        Err(err) if err.downcast_ref::<crate::Interrupted>().is_some() => 130,
         Err(err) => {
             eprintln!("error: {err:#}");
-            ExitCode::from(crate::exit_status_for(&err))
+            crate::exit_status_for(&err)
         }
     }
+}
+
+/// [`exit_status`] as the `ExitCode` a `main` returns.
+pub fn run<I, T>(args: I) -> ExitCode
+where
+    I: IntoIterator<Item = T>,
+    T: Into<OsString> + Clone,
+{
+    ExitCode::from(exit_status(args))
 }
 
 #[cfg(test)]

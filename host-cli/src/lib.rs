@@ -12,14 +12,14 @@
 //!  propid-drive-proto  the driver, the simulated Telega, the register client: Sans-IO machines
 //!  propid-drive-host   those machines on a real bus and clock, recording to files; the live view's model
 //!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
-//!  propid (here)     run(args): the command line as a function (main.rs is one call to it)
-//!                    settings: each setting a type (flag, register, variable, parse); raw → checked
+//!  propid (here)     cli — the command line, also run in-process (the Python package's `propid`);
+//!                    settings — each setting a type (flag, register, variable, parse); raw → checked;
 //!                    cmd::* — one module per subcommand: its settings → library call → output
 //! ```
 #![deny(missing_docs)]
 
 pub mod bus;
-mod cli;
+pub mod cli;
 pub mod cmd;
 pub mod html;
 pub mod live;
@@ -27,7 +27,7 @@ pub mod plot;
 pub mod settings;
 pub mod signals;
 
-pub use cli::run;
+pub use cli::{exit_status, run};
 pub use propid_io::InputError;
 
 /// The run was interrupted (SIGINT or SIGTERM, or STOP on the live page) and stopped as it

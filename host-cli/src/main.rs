@@ -1,5 +1,7 @@
-//! The `propid` command: the library's [`propid::run`] on the process's arguments.
+//! The `propid` command: a thin argument parser over the `propid` library ([`propid::cli`]).
 
-fn main() -> std::process::ExitCode {
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
     propid::run(std::env::args_os())
 }
