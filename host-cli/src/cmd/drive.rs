@@ -25,7 +25,7 @@ use propid_science::excitation::{Excitation, Pattern};
 
 use crate::bus::{Bus, BusArgs};
 use crate::settings::{
-    command_args, environment, fill, number, setpoint_range, setting, ConfigError, ConfigErrors,
+    checked, command_args, environment, fill, setpoint_range, setting, ConfigError, ConfigErrors,
     Names, Problem, RegisterFile,
 };
 use crate::InputError;
@@ -36,8 +36,6 @@ setting! {
         Names::register("node-id", registers::NODE_ID, "UAVCAN__NODE__ID"),
         "This node's ID",
         crate::settings::node_id;
-}
-setting! {
     /// This node's description (register and environment only).
     Description: String = Names {
         flag: None,
@@ -46,75 +44,53 @@ setting! {
     },
         "This node's description",
         |text: &str| Ok(text.to_string());
-}
-setting! {
     /// The readiness publisher's subject.
     ReadinessId: Option<SubjectId> =
         Names::register("readiness-id", registers::DRIVE_READINESS_ID, "UAVCAN__PUB__READINESS__ID"),
         "Subject-ID of the readiness publisher; none is published when unset",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint publisher's subject.
     SetpointId: Option<SubjectId> =
         Names::register("setpoint-id", registers::DRIVE_SETPOINT_ID, "UAVCAN__PUB__SP_RAT__ID"),
         "Subject-ID of the ratiometric setpoint publisher",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback subscriber's subject.
     FeedbackId: Option<SubjectId> =
         Names::register("feedback-id", registers::DRIVE_FEEDBACK_ID, "UAVCAN__SUB__FB_DYN__ID"),
         "Subject-ID of the dynamics feedback subscriber",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint range.
     LoHi: SetpointRange =
         Names::register("setpoint-rat-lo-hi", registers::SETPOINT_RAT_LO_HI, "SETPOINT_RAT_LO_HI"),
         "Setpoint range \"LO HI\", ratiometric, -1 ≤ LO < HI ≤ 1 [default: 0.1 0.9]",
         setpoint_range;
-}
-setting! {
     /// The pattern's period.
     PeriodSetting: Period = Names::register("period", registers::PERIOD, "PERIOD"),
         "Period of the sinusoid [s] [default: 2]",
-        |text: &str| number(text, Period::new);
-}
-setting! {
+        within Period;
     /// The pattern's duration.
     PatternDurationSetting: PatternDuration =
         Names::register("pattern-duration", registers::PATTERN_DURATION, "PATTERN_DURATION"),
         "Duration of the pattern [s] [default: 200]",
-        |text: &str| number(text, PatternDuration::new);
-}
-setting! {
+        within PatternDuration;
     /// The init phase's duration.
     InitDurationSetting: InitDuration =
         Names::register("init-duration", registers::INIT_DURATION, "INIT_DURATION"),
         "Duration of the initial run at the high setpoint [s] [default: 5]",
-        |text: &str| number(text, InitDuration::new);
-}
-setting! {
+        within InitDuration;
     /// The setpoint publication period.
     SetpointPeriodSetting: SetpointPeriod =
         Names::register("setpoint-period", registers::SETPOINT_PERIOD, "SETPOINT_PERIOD"),
         "Setpoint publication period [s] [default: 0.005]",
-        |text: &str| number(text, SetpointPeriod::new);
-}
-setting! {
+        within SetpointPeriod;
     /// The deadman timeout.
     DeadmanSetting: Deadman = Names::flag("deadman"),
         "Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s] [default: 0.5]",
-        |text: &str| number(text, Deadman::new);
-}
-setting! {
+        within Deadman;
     /// The drive whose heartbeat is watched.
     DriveNodeId: NodeId = Names::flag("drive-node-id"),
         "Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of the first feedback message)",
         |text: &str| text.parse::<NodeId>().map_err(Problem::Id);
-}
-setting! {
     /// The precision to stop at.
     UntilStderr: RelativeError = Names::flag("until-stderr"),
         "Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at most this many percent; the pattern duration is then the longest the run may take",
@@ -340,43 +316,11 @@ impl TryFrom<Raw> for Settings {
             Some(Ok(played)) => Some(Some(played)),
             None => Some(None),
         };
-        let (
-            Some(node_id),
-            Some(description),
-            Some(bus),
-            Some(readiness_id),
-            Some(setpoint_id),
-            Some(feedback_id),
-            Some(range),
-            Some(period),
-            Some(duration),
-            Some(init_duration),
-            Some(setpoint_period),
-            Some(deadman),
-            Some(drive_node_id),
-            Some(until),
-            Some(from_file),
-        ) = (
-            node_id,
-            description,
-            bus,
-            readiness_id,
-            setpoint_id,
-            feedback_id,
-            range,
-            period,
-            duration,
-            init_duration,
-            setpoint_period,
-            deadman,
-            drive_node_id,
-            until,
-            from_file,
-        )
-        else {
-            return Err(errors);
-        };
-        errors.check()?;
+        checked!(
+            errors;
+            node_id, description, bus, readiness_id, setpoint_id, feedback_id, range, period,
+            duration, init_duration, setpoint_period, deadman, drive_node_id, until, from_file,
+        );
         let played = from_file.unwrap_or_else(|| {
             let schedule = Schedule {
                 range,

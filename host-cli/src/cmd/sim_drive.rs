@@ -22,7 +22,7 @@ use crate::bus::{Bus, BusArgs};
 use crate::cmd::drive::NodeIdSetting;
 use crate::cmd::sim::StandArgs;
 use crate::settings::{
-    command_args, environment, fill, number, setting, ConfigErrors, Names, Problem,
+    checked, command_args, environment, fill, setting, ConfigErrors, Names, Problem,
 };
 
 setting! {
@@ -31,36 +31,26 @@ setting! {
         Names::register("readiness-id", TELEGA_READINESS_ID, "UAVCAN__SUB__READINESS__ID"),
         "Readiness subject (no readiness gating when unset)",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint subscription.
     SetpointId: Option<SubjectId> =
         Names::register("setpoint-id", TELEGA_SETPOINT_ID, "UAVCAN__SUB__SETPOINT_R_TORQ__ID"),
         "Ratiometric torque setpoint subject [default: 24]",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback publication.
     FeedbackId: Option<SubjectId> =
         Names::register("feedback-id", TELEGA_FEEDBACK_ID, "UAVCAN__PUB__DYNAMICS__ID"),
         "Dynamics feedback subject [default: 110]",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback interval.
     Interval: FeedbackInterval =
         Names::register("interval", PUB_INTERVAL_MIN, "MNS__PUB_INTERVAL_MIN"),
         "Feedback interval [s], writable over the bus [default: 0.002]",
-        |text: &str| number(text, FeedbackInterval::new);
-}
-setting! {
+        within FeedbackInterval;
     /// Local timestamps.
     LocalTimestamp: bool =
         Names::register("local-timestamp", LOCAL_TIMESTAMP, "MNS__LOCAL_TIMESTAMP"),
         "Stamp the feedback with the drive's clock (false: the timestamp is 0, unknown) [default: true]",
         crate::settings::bit;
-}
-setting! {
     /// How long to run.
     Duration: Option<RunLimit> = Names::flag("duration"),
         "Stop after this many seconds (0: run until interrupted) [default: 0]",
@@ -132,29 +122,11 @@ impl TryFrom<Args> for Settings {
         let interval = e.or(interval, example.interval);
         let local_timestamp = e.or(local_timestamp, true);
         let duration = e.or(duration, None);
-        let (
-            Some(node_id),
-            Some(bus),
-            Some(readiness_id),
-            Some(setpoint_id),
-            Some(feedback_id),
-            Some(interval),
-            Some(local_timestamp),
-            Some(duration),
-        ) = (
-            node_id,
-            bus,
-            readiness_id,
-            setpoint_id,
-            feedback_id,
-            interval,
-            local_timestamp,
+        checked!(
+            errors;
+            node_id, bus, readiness_id, setpoint_id, feedback_id, interval, local_timestamp,
             duration,
-        )
-        else {
-            return Err(errors);
-        };
-        errors.check()?;
+        );
         let sim = SimDriveConfig {
             node_id,
             mtu: bus.mtu,

@@ -153,9 +153,25 @@ pub trait Setting: 'static {
     fn parse(text: &str) -> Result<Self::Value, Problem>;
 }
 
-/// Defines a setting: a unit type, its value type, its names, its help and its parse.
+/// Defines settings, each a unit type with its value type, its names, its help and its parse:
+/// `Name: Value = names, "help", parse;` or, for a number of a range type,
+/// `Name: Value = names, "help", within RangeType;`.
 macro_rules! setting {
-    ($(#[$doc:meta])* $name:ident: $value:ty = $names:expr, $help:literal, $parse:expr;) => {
+    () => {};
+    (
+        $(#[$doc:meta])* $name:ident: $value:ty = $names:expr, $help:literal, within $range:ident;
+        $($rest:tt)*
+    ) => {
+        $crate::settings::setting! {
+            $(#[$doc])* $name: $value = $names, $help,
+                |text: &str| $crate::settings::number(text, $range::new);
+        }
+        $crate::settings::setting! { $($rest)* }
+    };
+    (
+        $(#[$doc:meta])* $name:ident: $value:ty = $names:expr, $help:literal, $parse:expr;
+        $($rest:tt)*
+    ) => {
         $(#[$doc])*
         pub struct $name;
 
@@ -167,6 +183,8 @@ macro_rules! setting {
                 ($parse)(text)
             }
         }
+
+        $crate::settings::setting! { $($rest)* }
     };
 }
 pub(crate) use setting;
@@ -223,6 +241,19 @@ macro_rules! command_args {
     };
 }
 pub(crate) use command_args;
+
+/// `checked!(errors; a, b, …)`: each of the `Option`s `a`, `b`, … (a setting's checked value, or
+/// `None` when its error was recorded in `errors`) as its value, or `return Err(errors)` when
+/// any is missing or anything else was recorded.
+macro_rules! checked {
+    ($errors:ident; $($v:ident),+ $(,)?) => {
+        let ($(Some($v),)+) = ($($v,)+) else {
+            return Err($errors);
+        };
+        $errors.check()?;
+    };
+}
+pub(crate) use checked;
 
 /// The flag of `S`, for clap's `long = …`.
 pub const fn flag<S: Setting>() -> &'static str {
