@@ -26,6 +26,9 @@ use propid_io::InputError;
 
 use crate::excitation::Excitation;
 
+mod drivetrain;
+pub use drivetrain::{Drivetrain, DrivetrainConfig, DrivetrainSample, Electrical};
+
 /// Everything about the simulated stand.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct StandConfig {
@@ -158,6 +161,8 @@ pub struct Stand {
     force_sensor: FirstOrderLag<f64>,
     acceleration_sensor: FirstOrderLag<f64>,
     rng: StdRng,
+    /// Thrust and motor, when simulated ([`Stand::with_drivetrain`]).
+    drivetrain: Option<Drivetrain>,
 }
 
 fn normal(sigma: f64) -> Normal<f64> {
@@ -176,7 +181,21 @@ impl Stand {
             acceleration_sensor: FirstOrderLag::new(config.acceleration_lag, 0.0),
             rng: StdRng::seed_from_u64(seed),
             config,
+            drivetrain: None,
         }
+    }
+
+    /// Simulates a thrust cell and the motor's electrical side too (seeded from `seed`, apart
+    /// from the stand's own noise: no other column changes).
+    pub fn with_drivetrain(mut self, config: DrivetrainConfig, seed: u64) -> Self {
+        self.drivetrain = Some(Drivetrain::new(config, seed));
+        self
+    }
+
+    /// What the stand logs beside the drive's feedback now (`None` without a drivetrain).
+    pub fn measure_drivetrain(&mut self) -> Option<DrivetrainSample> {
+        let (omega, torque) = (self.load.velocity, self.motor_torque());
+        self.drivetrain.as_mut().map(|d| d.measure(omega, torque))
     }
 
     /// The configuration.
@@ -235,6 +254,10 @@ impl Stand {
             self.acceleration_sensor.step(dt, a);
             self.load.step(dt, felt);
             self.time += dt;
+            let (omega, torque) = (self.load.velocity, self.motor_torque());
+            if let Some(d) = &mut self.drivetrain {
+                d.step(self.time, dt, omega, torque);
+            }
         }
     }
 
@@ -269,6 +292,16 @@ impl Stand {
         excitation: &Excitation,
         mut sink: impl FnMut(Row) -> Result<(), E>,
     ) -> Result<u64, E> {
+        self.run_with_drivetrain(excitation, |row, _| sink(row))
+    }
+
+    /// [`Stand::run`], handing each row to `sink` with what the drivetrain logs at the same
+    /// instant (`None` without a drivetrain: [`Stand::with_drivetrain`]).
+    pub fn run_with_drivetrain<E>(
+        &mut self,
+        excitation: &Excitation,
+        mut sink: impl FnMut(Row, Option<DrivetrainSample>) -> Result<(), E>,
+    ) -> Result<u64, E> {
         let c = self.config;
         let start = self.time + excitation.init_duration;
         self.set_setpoint(excitation.hi);
@@ -296,10 +329,14 @@ impl Stand {
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();
-            sink(Row {
-                ts_local: 1000.0 + t + delay,
-                sample,
-            })?;
+            let drivetrain = self.measure_drivetrain();
+            sink(
+                Row {
+                    ts_local: 1000.0 + t + delay,
+                    sample,
+                },
+                drivetrain,
+            )?;
         }
         Ok(n)
     }

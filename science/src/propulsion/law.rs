@@ -115,31 +115,114 @@ pub(crate) fn golden_min(
     }
 }
 
-/// Weighted fit of A at fixed p: (A, χ²).
-fn fit_a(points: &[Point], n_r: f64, p: f64, shift: f64) -> (f64, f64) {
-    let (mut sxy, mut sxx) = (0.0, 0.0);
+/// How the load cell's zero enters a fit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ZeroTreatment {
+    /// Measured at rest and subtracted; its standard uncertainty enters as a systematic error.
+    Subtracted {
+        /// Standard uncertainty of the zero (same unit as the values).
+        stderr: f64,
+    },
+    /// Not measured: fitted as a constant with the law.
+    Fitted,
+}
+
+/// A fitted law and, when the zero was fitted, the zero ± its standard error.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LawFit {
+    /// The law.
+    pub law: PowerLaw,
+    /// The fitted zero and its standard error.
+    pub zero: Option<(f64, f64)>,
+}
+
+/// Solves the k×k system `m·x = b` by Gauss–Jordan with partial pivoting (k ≤ 3); also returns
+/// the inverse.
+fn solve_small(m: &[[f64; 3]; 3], k: usize) -> Option<[[f64; 3]; 3]> {
+    let mut a = *m;
+    let mut inv = [[0.0; 3]; 3];
+    for (i, row) in inv.iter_mut().enumerate().take(k) {
+        row[i] = 1.0;
+    }
+    for c in 0..k {
+        let p = (c..k).max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))?;
+        if a[p][c].abs() < 1e-300 || !a[p][c].is_finite() {
+            return None;
+        }
+        a.swap(c, p);
+        inv.swap(c, p);
+        let d = a[c][c];
+        for j in 0..k {
+            a[c][j] /= d;
+            inv[c][j] /= d;
+        }
+        for r in 0..k {
+            if r != c {
+                let f = a[r][c];
+                for j in 0..k {
+                    a[r][j] -= f * a[c][j];
+                    inv[r][j] -= f * inv[c][j];
+                }
+            }
+        }
+    }
+    Some(inv)
+}
+
+/// Weighted least squares of the linear parameters at fixed p: (A, zero, χ²); the zero is 0
+/// unless fitted. `shift` is added to every value (the zero moved for the systematic error).
+fn fit_linear(
+    points: &[Point],
+    n_r: f64,
+    p: f64,
+    fitted_zero: bool,
+    shift: f64,
+) -> (f64, f64, f64) {
+    let (mut sw, mut sx, mut sxx, mut sy, mut sxy) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for q in points {
         let w = 1.0 / (q.stderr * q.stderr);
         let x = (q.n / n_r).powf(p);
-        sxy += w * x * (q.value + shift);
+        let y = q.value + shift;
+        sw += w;
+        sx += w * x;
         sxx += w * x * x;
+        sy += w * y;
+        sxy += w * x * y;
     }
-    let a = sxy / sxx;
+    let (a, z) = if fitted_zero {
+        let det = sw * sxx - sx * sx;
+        ((sw * sxy - sx * sy) / det, (sxx * sy - sx * sxy) / det)
+    } else {
+        (sxy / sxx, 0.0)
+    };
     let chi2 = points
         .iter()
         .map(|q| {
-            let r = q.value + shift - a * (q.n / n_r).powf(p);
+            let r = q.value + shift - z - a * (q.n / n_r).powf(p);
             r * r / (q.stderr * q.stderr)
         })
         .sum();
-    (a, chi2)
+    (a, z, chi2)
 }
 
-/// Least-squares (A, p) with p in [0.5, 5], or p fixed.
-fn fit_ap(points: &[Point], n_r: f64, fixed_p: Option<f64>, shift: f64) -> (f64, f64, f64) {
-    let p = fixed_p.unwrap_or_else(|| golden_min(0.5, 5.0, |p| fit_a(points, n_r, p, shift).1, 60));
-    let (a, chi2) = fit_a(points, n_r, p, shift);
-    (a, p, chi2)
+/// Least-squares (A, p, zero) with p in [0.5, 5] unless fixed.
+fn fit_all(
+    points: &[Point],
+    n_r: f64,
+    fixed_p: Option<f64>,
+    fitted_zero: bool,
+    shift: f64,
+) -> (f64, f64, f64, f64) {
+    let p = fixed_p.unwrap_or_else(|| {
+        golden_min(
+            0.5,
+            5.0,
+            |p| fit_linear(points, n_r, p, fitted_zero, shift).2,
+            60,
+        )
+    });
+    let (a, z, chi2) = fit_linear(points, n_r, p, fitted_zero, shift);
+    (a, p, z, chi2)
 }
 
 /// Points with usable standard errors: a zero or missing one is replaced by the median of the
@@ -165,69 +248,76 @@ fn with_floor(points: &[Point]) -> Vec<Point> {
         .collect()
 }
 
-/// Fits X = A·(n/n_r)^p to plateau points (p free unless `fixed_p`), with the zero's systematic
-/// `zero_stderr` (same unit as X). `None` with fewer points than the law needs (two for a fixed
-/// exponent, three for a free one).
+/// Fits X = A·(n/n_r)^p (+ a zero, when not measured) to plateau points, p free unless
+/// `fixed_p`. `None` with fewer points than parameters + 1.
 pub fn fit_power_law(
     points: &[Point],
     n_r: f64,
     fixed_p: Option<f64>,
-    zero_stderr: f64,
-) -> Option<PowerLaw> {
-    let params = if fixed_p.is_some() { 1 } else { 2 };
-    if points.len() < params + 1 {
+    zero: ZeroTreatment,
+) -> Option<LawFit> {
+    let fitted_zero = zero == ZeroTreatment::Fitted;
+    // Parameter columns: A, then p (if free), then the zero (if fitted).
+    let k = 1 + usize::from(fixed_p.is_none()) + usize::from(fitted_zero);
+    if points.len() < k + 1 {
         return None;
     }
     let pts = with_floor(points);
-    let (a, p, chi2) = fit_ap(&pts, n_r, fixed_p, 0.0);
-    if !(a.is_finite() && p.is_finite()) {
+    let (a, p, z, chi2) = fit_all(&pts, n_r, fixed_p, fitted_zero, 0.0);
+    if !(a.is_finite() && p.is_finite() && z.is_finite()) {
         return None;
     }
-    let dof = (pts.len() - params) as f64;
-    let birge = (chi2 / dof).max(1.0);
-    // (JᵀWJ)⁻¹ at the optimum.
-    let mut m = [[0.0; 2]; 2];
+    let birge = (chi2 / (pts.len() - k) as f64).max(1.0);
+    let mut m = [[0.0; 3]; 3];
     for q in &pts {
         let w = 1.0 / (q.stderr * q.stderr);
         let x = (q.n / n_r).powf(p);
-        let j = [x, a * x * (q.n / n_r).ln()];
-        for r in 0..2 {
-            for c in 0..2 {
+        let mut j = vec![x];
+        if fixed_p.is_none() {
+            j.push(a * x * (q.n / n_r).ln());
+        }
+        if fitted_zero {
+            j.push(1.0);
+        }
+        for r in 0..k {
+            for c in 0..k {
                 m[r][c] += w * j[r] * j[c];
             }
         }
     }
-    let mut cov = if fixed_p.is_some() {
-        [[birge / m[0][0], 0.0], [0.0, 0.0]]
-    } else {
-        let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-        if det.is_nan() || det <= 0.0 {
-            return None;
-        }
-        [
-            [birge * m[1][1] / det, -birge * m[0][1] / det],
-            [-birge * m[1][0] / det, birge * m[0][0] / det],
-        ]
-    };
-    if zero_stderr > 0.0 {
-        // The zero moved by ±σ_z: X_i ∓ σ_z.
-        let (a_hi, p_hi, _) = fit_ap(&pts, n_r, fixed_p, -zero_stderr);
-        let (a_lo, p_lo, _) = fit_ap(&pts, n_r, fixed_p, zero_stderr);
-        let d = [0.5 * (a_hi - a_lo), 0.5 * (p_hi - p_lo)];
-        for r in 0..2 {
-            for c in 0..2 {
-                cov[r][c] += d[r] * d[c];
+    let inv = solve_small(&m, k)?;
+    let p_index = fixed_p.is_none().then_some(1);
+    let mut cov = [[birge * inv[0][0], 0.0], [0.0, 0.0]];
+    if let Some(i) = p_index {
+        cov[0][1] = birge * inv[0][i];
+        cov[1][0] = birge * inv[i][0];
+        cov[1][1] = birge * inv[i][i];
+    }
+    let zero_fit = fitted_zero.then(|| (z, (birge * inv[k - 1][k - 1]).sqrt()));
+    if let ZeroTreatment::Subtracted { stderr } = zero {
+        if stderr > 0.0 {
+            // The zero moved by ±σ_z: X_i ∓ σ_z.
+            let (a_hi, p_hi, _, _) = fit_all(&pts, n_r, fixed_p, false, -stderr);
+            let (a_lo, p_lo, _, _) = fit_all(&pts, n_r, fixed_p, false, stderr);
+            let d = [0.5 * (a_hi - a_lo), 0.5 * (p_hi - p_lo)];
+            for r in 0..2 {
+                for c in 0..2 {
+                    cov[r][c] += d[r] * d[c];
+                }
             }
         }
     }
     let lo = pts.iter().map(|q| q.n).fold(f64::INFINITY, f64::min);
     let hi = pts.iter().map(|q| q.n).fold(0.0, f64::max);
-    Some(PowerLaw {
-        reference_speed: n_r,
-        at_reference: a,
-        exponent: p,
-        covariance: cov,
-        speed_range: [lo, hi],
+    Some(LawFit {
+        law: PowerLaw {
+            reference_speed: n_r,
+            at_reference: a,
+            exponent: p,
+            covariance: cov,
+            speed_range: [lo, hi],
+        },
+        zero: zero_fit,
     })
 }
 
@@ -360,8 +450,8 @@ pub(crate) fn band_width_rpm(range_rpm: f64) -> f64 {
 pub fn coefficient_from_points(
     kind: Kind,
     points: &[Point],
-    zero_stderr: f64,
-    zero: String,
+    zero: ZeroTreatment,
+    zero_description: String,
     air: &Air,
     diameter: f64,
     chord: Option<f64>,
@@ -373,8 +463,35 @@ pub fn coefficient_from_points(
         s.exp()
     });
     let scale = |n: f64| kind.scale(air.density, n, diameter);
-    let free = fit_power_law(points, n_r, None, zero_stderr);
-    let quad = fit_power_law(points, n_r, Some(2.0), zero_stderr);
+    let free_fit = fit_power_law(points, n_r, None, zero);
+    let quad_fit = fit_power_law(points, n_r, Some(2.0), zero);
+    let free = free_fit.map(|f| f.law);
+    let quad = quad_fit.map(|f| f.law);
+    // A fitted zero is taken off the points for the band table.
+    let zero_stderr = match zero {
+        ZeroTreatment::Subtracted { stderr } => stderr,
+        ZeroTreatment::Fitted => 0.0,
+    };
+    let fitted = free_fit.or(quad_fit).and_then(|f| f.zero);
+    let shifted: Vec<Point>;
+    let points = match fitted {
+        Some((z, z_se)) => {
+            shifted = points
+                .iter()
+                .map(|p| Point {
+                    value: p.value - z,
+                    stderr: (p.stderr * p.stderr + z_se * z_se).sqrt(),
+                    ..*p
+                })
+                .collect();
+            &shifted[..]
+        }
+        None => points,
+    };
+    let zero_description = match fitted {
+        Some((z, z_se)) => format!("{zero_description}: {z:+.4} ± {z_se:.4} {}", kind.unit()),
+        None => zero_description,
+    };
     let too_few = |need: usize| {
         Quantity::cannot_judge(
             "1",
@@ -450,7 +567,7 @@ pub fn coefficient_from_points(
         law: free.or(quad),
         speed_dependent,
         bands,
-        zero,
+        zero: zero_description,
         sensor_lag: None,
     }
 }
@@ -534,15 +651,27 @@ mod tests {
                 }
             })
             .collect();
-        let law = fit_power_law(&pts, 140.0, None, 0.0).unwrap();
+        let fitted = ZeroTreatment::Subtracted { stderr: 0.0 };
+        let law = fit_power_law(&pts, 140.0, None, fitted).unwrap().law;
         assert!((law.exponent - 2.2).abs() < 0.01, "{law:?}");
         let t = law.value(150.0);
         assert!((law.speed_for(t) - 150.0).abs() < 1e-9);
         assert!(law.value_stderr(150.0) > 0.0 && law.speed_stderr(t) > 0.0);
-        let quad = fit_power_law(&pts, 140.0, Some(2.0), 0.0).unwrap();
+        let quad = fit_power_law(&pts, 140.0, Some(2.0), fitted).unwrap().law;
         assert_eq!(quad.exponent, 2.0);
         assert_eq!(quad.covariance[1][1], 0.0);
-        assert!(fit_power_law(&pts[..2], 140.0, None, 0.0).is_none());
+        assert!(fit_power_law(&pts[..2], 140.0, None, fitted).is_none());
+        // With an unknown zero of 0.05 added to every point, fitting the zero recovers both.
+        let offset: Vec<Point> = pts
+            .iter()
+            .map(|p| Point {
+                value: p.value + 0.05,
+                ..*p
+            })
+            .collect();
+        let f = fit_power_law(&offset, 140.0, None, ZeroTreatment::Fitted).unwrap();
+        assert!((f.law.exponent - 2.2).abs() < 0.02, "{f:?}");
+        assert!((f.zero.unwrap().0 - 0.05).abs() < 0.02, "{f:?}");
     }
 
     #[test]

@@ -470,7 +470,10 @@ fn coefficient(
         law::coefficient_from_points(
             kind,
             &points,
-            zero.stderr(),
+            match zero {
+                Zero::Unknown => law::ZeroTreatment::Fitted,
+                z => law::ZeroTreatment::Subtracted { stderr: z.stderr() },
+            },
             zero.describe(unit),
             &options.air,
             options.diameter,
@@ -647,12 +650,14 @@ fn dynamic_coefficient(kind: Kind, rec: &Recording, options: &Options) -> Option
                 "; inertia seen by the cell J = {j:.4e} ± {s:.1e} kg·m²"
             ))
         ),
-        sensor_lag: Some(Quantity::judge_relative(
-            free.lag,
-            free.lag_stderr,
-            "s",
-            0.5,
-        )),
+        sensor_lag: Some(if free.lag > 0.0 {
+            Quantity::judge_relative(free.lag, free.lag_stderr, "s", 0.5)
+        } else {
+            Quantity::cannot_judge(
+                "s",
+                "no lag resolved: τ = 0 fits best (the cell follows within a row interval)",
+            )
+        }),
     })
 }
 

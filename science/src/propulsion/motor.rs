@@ -15,8 +15,13 @@
 //! computed from its current fits it exactly, and that is said). Without a duty, the power
 //! balance still gives the friction torque Q_f and r = R/K_t² (but not K_e: the bus voltage is
 //! not the motor's), and with them the efficiency map. On dynamic runs the back-EMF equation is
-//! fitted row by row with the ESC's current filter (a first-order lag τ on the reported
-//! current, as the AutoQuad ESC32's `adcAvgAmps` running average is) found by golden section.
+//! fitted row by row with the ESC's current filter (a first-order lag τ on the reported bus
+//! current, as the AutoQuad ESC32's `adcAvgAmps` running average is) found by golden section:
+//! multiplied by the duty, the equations are linear in the bus current the ESC filters,
+//!
+//! ```text
+//!  L_τ[d²·V_bus] = K_e·L_τ[d·ω] + R·I_reported        I_reported = L_τ[d·Q]/K_t + I_0·L_τ[d]
+//! ```
 
 use propid_core::estimate::NormalEquations;
 use serde::{Deserialize, Serialize};
@@ -29,6 +34,9 @@ use super::{Recording, TAU};
 
 /// Duties below this are not used (I_bus/d is then dominated by the current's noise).
 pub const MIN_DUTY: f64 = 0.05;
+
+/// Longest current filter a dynamic fit considers [s].
+pub const MAX_CURRENT_FILTER: f64 = 0.2;
 
 /// rpm/V from K_e [V·s/rad].
 pub fn kv_from_ke(ke: f64) -> f64 {
@@ -352,15 +360,17 @@ pub fn from_dynamic(rec: &Recording) -> Result<Motor, String> {
         });
     };
     let t = &rec.time;
-    let vm: Vec<f64> = v.iter().zip(d).map(|(v, d)| v * d).collect();
-    let im: Vec<f64> = i
-        .iter()
-        .zip(d)
-        .map(|(i, d)| if *d > MIN_DUTY { i / d } else { f64::NAN })
-        .collect();
+    // The ESC filters the bus current it reports, I_bus = d·I_m. Multiplied by d, the back-EMF
+    // equation is linear in it: d²·V_bus = K_e·(d·ω) + R·I_bus; through the filter L_τ,
+    // L_τ[d²·V_bus] = K_e·L_τ[d·ω] + R·I_reported, with no division by a filtered current.
+    let active: Vec<bool> = d.iter().map(|d| *d > MIN_DUTY).collect();
+    let d2v: Vec<f64> = v.iter().zip(d).map(|(v, d)| d * d * v).collect();
+    let dw: Vec<f64> = rec.speed.iter().zip(d).map(|(w, d)| d * w).collect();
     let rows: Vec<usize> = updates(i)
         .into_iter()
-        .filter(|&k| im[k].is_finite() && vm[k].is_finite() && rec.speed[k].is_finite())
+        // The filter's state before the record is unknown: its first 5·τ_max are not fitted.
+        .filter(|&k| t[k] > t[0] + 5.0 * MAX_CURRENT_FILTER)
+        .filter(|&k| active[k] && d2v[k].is_finite() && dw[k].is_finite())
         .collect();
     if rows.len() < 50 {
         return Err(format!(
@@ -368,19 +378,33 @@ pub fn from_dynamic(rec: &Recording) -> Result<Motor, String> {
             rows.len()
         ));
     }
+    let voltage_noise = super::plateau::noise_of(v);
+    let speed_noise = super::plateau::noise_of(&rec.speed);
+    let interval = super::dynamic::median_interval(t);
+    let mean_d2: f64 = rows.iter().map(|&k| d[k].powi(2)).sum::<f64>() / rows.len() as f64;
+    let mean_d4: f64 = rows.iter().map(|&k| d[k].powi(4)).sum::<f64>() / rows.len() as f64;
     let solve = |tau: f64| {
-        let vl = lag(t, &vm, tau);
-        let wl = lag(t, &rec.speed, tau);
+        let yl = lag(t, &d2v, tau);
+        let xl = lag(t, &dw, tau);
         let mut eq = NormalEquations::<f64, 2>::new();
         for &k in &rows {
-            eq.update(&[wl[k], im[k]], vl[k]);
+            eq.update(&[xl[k], i[k]], yl[k]);
         }
         eq.solve()
             .ok()
             .map(|s| (eq.residual_sum_of_squares(&s.theta), s))
     };
-    let rss = |tau: f64| solve(tau).map_or(f64::INFINITY, |s| s.0);
-    let mut tau = golden_min(0.0, 0.2, rss, 40);
+    // The lag smooths the voltage's noise (in d²·V_bus) and the speed's (in K_e·d·ω): that part
+    // of the residual is put back before lags are compared.
+    let rss = |tau: f64| {
+        solve(tau).map_or(f64::INFINITY, |s| {
+            let lost = 1.0 - super::dynamic::smoothing_gain(interval, tau);
+            let noise =
+                mean_d4 * voltage_noise.powi(2) + mean_d2 * (s.1.theta[0] * speed_noise).powi(2);
+            s.0 + lost * rows.len() as f64 * noise
+        })
+    };
+    let mut tau = golden_min(0.0, MAX_CURRENT_FILTER, rss, 40);
     if rss(0.0) <= rss(tau) {
         tau = 0.0;
     }
@@ -396,16 +420,42 @@ pub fn from_dynamic(rec: &Recording) -> Result<Motor, String> {
     };
     let ke = Quantity::judge(s.theta[0], s.stderr[0], "V·s/rad");
     let resistance = Quantity::judge(s.theta[1], s.stderr[1], "Ω");
-    // K_t, I_0: the reported current against the shaft torque through the same filter.
+    // K_t, I_0: I_reported = (1/K_t)·L_τ[d·Q] + I_0·L_τ[d].
     let (kt, no_load_current) = match &rec.torque {
         Some(q) => {
-            let ql = lag(t, q, tau);
-            let pts: Vec<(f64, f64)> = rows
-                .iter()
-                .filter(|&&k| ql[k].is_finite())
-                .map(|&k| (ql[k], im[k]))
-                .collect();
-            torque_current(&pts, "row")
+            let dq: Vec<f64> = q.iter().zip(d).map(|(q, d)| q * d).collect();
+            let dql = lag(t, &dq, tau);
+            let dl = lag(t, d, tau);
+            let mut eq = NormalEquations::<f64, 2>::new();
+            for &k in &rows {
+                if dql[k].is_finite() {
+                    eq.update(&[dql[k], dl[k]], i[k]);
+                }
+            }
+            match eq.solve() {
+                Ok(s) if s.rms >= 1e-9 * s.theta[1].abs().max(1e-3) => (
+                    Quantity::judge(
+                        1.0 / s.theta[0],
+                        s.stderr[0] / (s.theta[0] * s.theta[0]),
+                        "N·m/A",
+                    ),
+                    Quantity::judge_relative(s.theta[1], s.stderr[1], "A", 0.5),
+                ),
+                Ok(_) => {
+                    let why = "the torque column is proportional to the current (it was computed from it): K_t cannot be checked against it".to_string();
+                    (
+                        Quantity::cannot_judge("N·m/A", why.clone()),
+                        Quantity::cannot_judge("A", why),
+                    )
+                }
+                Err(_) => {
+                    let why = "the torque and the duty do not vary independently".to_string();
+                    (
+                        Quantity::cannot_judge("N·m/A", why.clone()),
+                        Quantity::cannot_judge("A", why),
+                    )
+                }
+            }
         }
         None => {
             let why = "no torque column: K_t needs the shaft torque".to_string();

@@ -3,7 +3,8 @@
 //! A row is *steady* when the speed over the `settle` seconds before it stayed within a band of
 //! `tolerance` × speed (or eight times the speed's noise, whichever is wider): the rotor has
 //! reached its speed and a load cell behind it has settled. A *plateau* is a run of steady rows
-//! lasting at least `min_duration`. On each plateau every channel is averaged over its own
+//! lasting at least `min_duration`; its last quarter-`settle` is cut (the command has changed a
+//! little before the speed leaves the band). On each plateau every channel is averaged over its own
 //! samples (a slow load cell logs a few per second, the speed every row), with a standard error
 //! that counts only independent samples: repeated values of a held sensor count once, and the
 //! lag-1 autocorrelation of what remains reduces the count further (n_eff = n(1 − r)/(1 + r)).
@@ -247,7 +248,7 @@ pub struct Steady {
 }
 
 /// Standard deviation of white noise on `x` from the median absolute successive difference.
-fn noise_of(x: &[f64]) -> f64 {
+pub(crate) fn noise_of(x: &[f64]) -> f64 {
     let mut d: Vec<f64> = x
         .windows(2)
         .map(|w| (w[1] - w[0]).abs())
@@ -392,10 +393,17 @@ pub fn find(rec: &Recording, options: &PlateauOptions) -> Steady {
         while j + 1 < n && steady[j + 1] {
             j += 1;
         }
+        let next = j + 1;
+        // The rows just before the speed leaves the band already follow the next command (the
+        // speed needs tens of milliseconds to move 2 %): a quarter of the settling time is cut.
+        let end_time = rec.time[j] - 0.25 * options.settle;
+        while j > k && rec.time[j] > end_time {
+            j -= 1;
+        }
         if rec.time[j] - rec.time[k] >= options.min_duration {
             plateaus.push(plateau(rec, k, j, thrust_zero, torque_zero));
         }
-        k = j + 1;
+        k = next;
     }
     Steady {
         plateaus,
