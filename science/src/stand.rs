@@ -296,10 +296,7 @@ impl Stand {
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();
-            sink(Row {
-                ts_local: 1000.0 + t + delay,
-                sample,
-            })?;
+            sink(Row::new(1000.0 + t + delay, sample))?;
         }
         Ok(n)
     }
