@@ -709,10 +709,8 @@ impl Drive {
                 self.recent.pop_front();
             }
             self.recent.push_back(sample);
-            self.events.push_back(DriveEvent::Row(Row {
-                ts_local: timestamp.as_secs_f64(),
-                sample,
-            }));
+            self.events
+                .push_back(DriveEvent::Row(Row::new(timestamp.as_secs_f64(), sample)));
         }
     }
 

@@ -1,5 +1,5 @@
 //! Fuzz the importers (RCbenchmark/Tyto and ESC32 CSV): any bytes give an import or an error
-//! naming the input, never a panic; an import has strictly increasing time, one command per row,
+//! naming the input, never a panic; an import has strictly increasing time, one value per row in every extra column,
 //! and its TSV is written.
 #![no_main]
 
@@ -10,8 +10,8 @@ fn check(result: Result<Imported, propid_io::InputError>) {
     match result {
         Ok(im) => {
             assert!(im.rows.windows(2).all(|w| w[1].sample.t > w[0].sample.t));
-            if let Some(c) = &im.command {
-                assert_eq!(c.len(), im.rows.len());
+            for c in &im.extra {
+                assert_eq!(c.values.len(), im.rows.len());
             }
             write_tsv(&im, std::io::sink()).unwrap();
         }

@@ -1,5 +1,6 @@
 //! `propid import` from the command line: what it measured is printed, bad input exits 2 with
-//! the place named, and the command column reaches the TSV.
+//! the place named, and the stand's columns (command, thrust, voltage, current, power) reach
+//! the TSV.
 
 mod common;
 
@@ -48,19 +49,32 @@ fn rcbench_reports_what_it_measured_and_keeps_the_command() {
         "torque sign flipped",
         "zero offset: at zero speed",
         "not subtracted",
-        "command = `ESC signal (µs)`",
+        "command = (`ESC signal (µs)` − 1000 µs) / 1000 µs",
+        "thrust = `Thrust (gf)` × 0.00980665 N per unit",
     ] {
         assert!(err.contains(want), "`{want}` not in {err}");
     }
     let tsv = std::fs::read_to_string(&out_tsv).unwrap();
-    assert!(tsv.lines().next().unwrap().ends_with("\tcommand"));
-    // The command is the PWM the stand gave: 1050–1950 µs in this run.
-    let cmds: Vec<f64> = tsv
-        .lines()
-        .skip(1)
-        .filter_map(|l| l.rsplit('\t').next()?.parse().ok())
-        .filter(|c: &f64| c.is_finite())
-        .collect();
-    let max = cmds.iter().copied().fold(f64::MIN, f64::max);
-    assert!((1900.0..=2000.0).contains(&max), "{max}");
+    let header: Vec<&str> = tsv.lines().next().unwrap().split('\t').collect();
+    let column = |name: &str| -> Vec<f64> {
+        let k = header.iter().position(|h| *h == name).unwrap();
+        tsv.lines()
+            .skip(1)
+            .filter_map(|l| l.split('\t').nth(k)?.parse().ok())
+            .filter(|c: &f64| c.is_finite())
+            .collect()
+    };
+    let max = |v: Vec<f64>| v.into_iter().fold(f64::MIN, f64::max);
+    // The command is the PWM the stand gave: 1050–1950 µs in this run, 0.05–0.95 as a ratio.
+    let us = max(column("esc_signal_us"));
+    assert!((1900.0..=2000.0).contains(&us), "{us}");
+    let ratio = max(column("command"));
+    assert!((0.9..=1.0).contains(&ratio), "{ratio}");
+    // The thrust in newtons, positive at speed: the 7-inch propeller at full throttle pushes
+    // more than 1 kgf.
+    let thrust = max(column("thrust"));
+    assert!((10.0..30.0).contains(&thrust), "{thrust}");
+    for name in ["voltage", "current", "electrical_power", "mechanical_power"] {
+        assert!(!column(name).is_empty(), "{name}");
+    }
 }

@@ -3,7 +3,9 @@
 //! Every producer of measurements in propid — the driver, `replay`, the stand simulators, the
 //! importers of other stands' logs — writes one format, and every consumer — `fit`, `diagnose`,
 //! the plots — reads it: the TSV of [`tsv::Sample`]s (time, torque, velocity, acceleration,
-//! position). This crate owns that currency and the ways into it:
+//! position), with what a test stand measures beside them in optional columns ([`tsv::Stand`]:
+//! thrust, bus voltage and current, the command). This crate owns that currency and the ways
+//! into it:
 //!
 //! ```text
 //!  candump -L log ──► candump::parse_candump_line ─► Frame ─► Reassembler ─► DoF3rdTs ─┐

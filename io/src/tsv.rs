@@ -1,10 +1,19 @@
 //! The TSV currency: every producer of samples (drive, replay, sim, importers) writes it and every
 //! consumer (fit, diagnose, plot) reads it.
 //!
-//! Columns, by header name (order free, extra columns ignored):
+//! Columns, by header name (order free, other columns ignored):
 //! `ts_local` (host receive time, s, optional), `t` (device time, s), `force` (N·m), `velocity`
 //! (rad/s), `acceleration` (rad/s²), `position` (rad, optional). This is the seed driver's output
 //! plus `position`. Empty fields and `nan` read as NaN (the seed's pandas does the same).
+//!
+//! A test stand measures more than the drive reports; four optional columns carry it, in
+//! [`Row::stand`] ([`Stand`]): `thrust` (N), `voltage` (the DC bus, V), `current` (the DC bus,
+//! A), `command` (what the stand asked of the ESC or drive, as a ratio: 0 = nothing, 1 = full;
+//! an importer states how it converted the logged unit). Absent columns and empty fields read as
+//! NaN, like `position`: a value is either measured in this row or NaN, never filled in. A writer
+//! writes the seed's six columns, then the stand columns it is given ([`TsvWriter::with_columns`]),
+//! then any named extra columns (for example an importer's `electrical_power`), which readers
+//! ignore.
 
 use std::io::{BufRead, Write};
 
@@ -33,16 +42,131 @@ impl Sample {
     }
 }
 
-/// A TSV row: the sample plus the host's receive time, if the file has it.
+/// What a test stand measures beside the drive's dynamics feedback, in the same row. Each is NaN
+/// where the source has no such column or no sample in this row (a slow load cell leaves most
+/// rows empty): never interpolated, never held.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stand {
+    /// Thrust [N] (a propeller pushing air: positive along its thrust axis).
+    pub thrust: f64,
+    /// DC bus voltage [V].
+    pub voltage: f64,
+    /// DC bus current [A].
+    pub current: f64,
+    /// The command given to the ESC or drive as a ratio: 0 nothing, 1 full (a duty, a PWM
+    /// signal mapped onto its range, a ratiometric setpoint); the producer states its mapping.
+    pub command: f64,
+}
+
+impl Stand {
+    /// Nothing measured: every value NaN.
+    pub const NONE: Stand = Stand {
+        thrust: f64::NAN,
+        voltage: f64::NAN,
+        current: f64::NAN,
+        command: f64::NAN,
+    };
+
+    /// The value of one column.
+    pub fn get(&self, column: StandColumn) -> f64 {
+        match column {
+            StandColumn::Thrust => self.thrust,
+            StandColumn::Voltage => self.voltage,
+            StandColumn::Current => self.current,
+            StandColumn::Command => self.command,
+        }
+    }
+
+    /// The value of one column, to set.
+    pub fn get_mut(&mut self, column: StandColumn) -> &mut f64 {
+        match column {
+            StandColumn::Thrust => &mut self.thrust,
+            StandColumn::Voltage => &mut self.voltage,
+            StandColumn::Current => &mut self.current,
+            StandColumn::Command => &mut self.command,
+        }
+    }
+}
+
+impl Default for Stand {
+    /// [`Stand::NONE`].
+    fn default() -> Self {
+        Stand::NONE
+    }
+}
+
+/// One of the optional stand columns of the TSV.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StandColumn {
+    /// `thrust` [N].
+    Thrust,
+    /// `voltage` [V], the DC bus.
+    Voltage,
+    /// `current` [A], the DC bus.
+    Current,
+    /// `command` [ratio 0–1].
+    Command,
+}
+
+impl StandColumn {
+    /// Every stand column, in the order they are written.
+    pub const ALL: [StandColumn; 4] = [
+        StandColumn::Thrust,
+        StandColumn::Voltage,
+        StandColumn::Current,
+        StandColumn::Command,
+    ];
+
+    /// The column's header name.
+    pub fn name(self) -> &'static str {
+        COLUMNS[self.slot()]
+    }
+
+    /// The column's unit as documents print it.
+    pub fn unit(self) -> &'static str {
+        match self {
+            StandColumn::Thrust => "N",
+            StandColumn::Voltage => "V",
+            StandColumn::Current => "A",
+            StandColumn::Command => "ratio 0–1",
+        }
+    }
+
+    /// Its slot in [`COLUMNS`] (and in [`Layout::parse_line`]'s values).
+    pub fn slot(self) -> usize {
+        match self {
+            StandColumn::Thrust => 6,
+            StandColumn::Voltage => 7,
+            StandColumn::Current => 8,
+            StandColumn::Command => 9,
+        }
+    }
+}
+
+/// A TSV row: the sample, the host's receive time and what a stand measured beside it, each
+/// NaN where the file does not have it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Row {
     /// Host monotonic receive time [s] (NaN if the file has no `ts_local` column).
     pub ts_local: f64,
     /// The measurement.
     pub sample: Sample,
+    /// The stand's other measurements ([`Stand::NONE`] for a drive's own feedback).
+    pub stand: Stand,
 }
 
-/// The header `propid` writes.
+impl Row {
+    /// A row of the seed's columns (no stand measurements).
+    pub const fn new(ts_local: f64, sample: Sample) -> Row {
+        Row {
+            ts_local,
+            sample,
+            stand: Stand::NONE,
+        }
+    }
+}
+
+/// The header `propid` writes by default: the seed driver's columns plus `position`.
 pub const HEADER: [&str; 6] = [
     "ts_local",
     "t",
@@ -51,6 +175,26 @@ pub const HEADER: [&str; 6] = [
     "acceleration",
     "position",
 ];
+
+/// Number of columns the reader knows ([`COLUMNS`]).
+pub const SLOTS: usize = 10;
+
+/// Every column the reader knows, by slot: [`HEADER`], then the stand columns.
+pub const COLUMNS: [&str; SLOTS] = [
+    "ts_local",
+    "t",
+    "force",
+    "velocity",
+    "acceleration",
+    "position",
+    "thrust",
+    "voltage",
+    "current",
+    "command",
+];
+
+/// The values of one line, by slot of [`COLUMNS`] (NaN where empty or absent).
+pub type Values = [f64; SLOTS];
 
 /// Why a TSV could not be read. Every variant names where.
 #[derive(Debug, thiserror::Error)]
@@ -117,8 +261,8 @@ pub enum TsvError {
 /// independent).
 #[derive(Clone, Debug)]
 pub struct Layout {
-    /// Field indices of ts_local, t, force, velocity, acceleration, position.
-    idx: [Option<usize>; 6],
+    /// Field index of each column of [`COLUMNS`] in the file.
+    idx: [Option<usize>; SLOTS],
     /// For each field index up to the last used one, the slot it fills (`NONE` if unused).
     slot_of: Vec<u8>,
 }
@@ -130,14 +274,14 @@ const NONE: u8 = u8::MAX;
 pub enum RowError {
     /// A used field is not a number.
     NotANumber {
-        /// Slot in [`HEADER`].
+        /// Slot in [`COLUMNS`].
         slot: usize,
         /// The offending text (shortened).
         text: String,
     },
     /// The row ends before a required column.
     ShortRow {
-        /// Slot in [`HEADER`].
+        /// Slot in [`COLUMNS`].
         slot: usize,
         /// Fields present.
         found: usize,
@@ -153,7 +297,7 @@ impl RowError {
             RowError::NotANumber { slot, text } => TsvError::NotANumber {
                 source_name: source_name.to_string(),
                 line,
-                column: HEADER[slot].to_string(),
+                column: COLUMNS[slot].to_string(),
                 text,
             },
             RowError::ShortRow {
@@ -163,7 +307,7 @@ impl RowError {
             } => TsvError::ShortRow {
                 source_name: source_name.to_string(),
                 line,
-                column: HEADER[slot].to_string(),
+                column: COLUMNS[slot].to_string(),
                 found,
                 needed,
             },
@@ -206,8 +350,8 @@ fn parse_field_bytes(field: &[u8]) -> Option<f64> {
     }
 }
 
-/// Every slot of [`HEADER`], for [`Layout::parse_line_converting`].
-pub const ALL_SLOTS: u8 = 0b11_1111;
+/// Every slot of [`COLUMNS`], for [`Layout::parse_line_converting`].
+pub const ALL_SLOTS: u16 = (1 << SLOTS) - 1;
 
 /// The line without the `\r`s (and `\n`s) at its end.
 #[inline]
@@ -267,7 +411,7 @@ fn plain_decimal(field: &[u8]) -> Option<usize> {
 }
 
 impl Layout {
-    fn new(idx: [Option<usize>; 6]) -> Self {
+    fn new(idx: [Option<usize>; SLOTS]) -> Self {
         let last = idx.iter().flatten().copied().max().unwrap_or(0);
         let mut slot_of = vec![NONE; last + 1];
         for (slot, i) in idx.iter().enumerate() {
@@ -294,14 +438,14 @@ impl Layout {
         !(line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line))
     }
 
-    /// Parses one line (without its `\n`) into ts_local, t, force, velocity, acceleration,
-    /// position (NaN where empty or absent); `None` for a blank line.
-    pub fn parse_line(&self, line: &[u8]) -> Result<Option<[f64; 6]>, RowError> {
+    /// Parses one line (without its `\n`) into the values of [`COLUMNS`] (NaN where empty or
+    /// absent); `None` for a blank line.
+    pub fn parse_line(&self, line: &[u8]) -> Result<Option<Values>, RowError> {
         self.parse_line_converting(line, ALL_SLOTS)
     }
 
     /// [`Layout::parse_line`], converting only the slots whose bit (`1 << slot`, slots in
-    /// [`HEADER`] order) is set in `convert`. The other fields are checked all the same (the
+    /// [`COLUMNS`] order) is set in `convert`. The other fields are checked all the same (the
     /// same text is the same error) and read as `0.0` when they are a plain decimal number
     /// (`-?[0-9]+(.[0-9]+)?`, at most 300 bytes: always finite), without the cost of a float
     /// conversion; any other text is converted as `parse_line` does. So in every slot
@@ -310,13 +454,13 @@ impl Layout {
     pub fn parse_line_converting(
         &self,
         line: &[u8],
-        convert: u8,
-    ) -> Result<Option<[f64; 6]>, RowError> {
+        convert: u16,
+    ) -> Result<Option<Values>, RowError> {
         let line = strip_cr(line);
         if line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line) {
             return Ok(None);
         }
-        let mut values = [f64::NAN; 6];
+        let mut values = [f64::NAN; SLOTS];
         let mut found = 0usize;
         let mut rest = line;
         for (field_index, &slot) in self.slot_of.iter().enumerate() {
@@ -381,8 +525,8 @@ impl Layout {
     }
 }
 
-/// A row from the six values of [`Layout::parse_line`].
-pub fn row_of(v: &[f64; 6]) -> Row {
+/// A row from the values of [`Layout::parse_line`].
+pub fn row_of(v: &Values) -> Row {
     Row {
         ts_local: v[0],
         sample: Sample {
@@ -391,6 +535,12 @@ pub fn row_of(v: &[f64; 6]) -> Row {
             velocity: v[3],
             acceleration: v[4],
             position: v[5],
+        },
+        stand: Stand {
+            thrust: v[6],
+            voltage: v[7],
+            current: v[8],
+            command: v[9],
         },
     }
 }
@@ -422,8 +572,8 @@ impl<R: BufRead> TsvReader<R> {
             return Err(TsvError::Empty { source_name });
         }
         let names: Vec<&str> = header_trimmed.split('\t').map(str::trim).collect();
-        let mut idx = [None; 6];
-        for (slot, want) in idx.iter_mut().zip(HEADER) {
+        let mut idx = [None; SLOTS];
+        for (slot, want) in idx.iter_mut().zip(COLUMNS) {
             *slot = names.iter().position(|n| *n == want);
         }
         for (i, want) in HEADER.iter().enumerate().take(5).skip(1) {
@@ -448,6 +598,19 @@ impl<R: BufRead> TsvReader<R> {
     /// True if the file has a `position` column.
     pub fn has_position(&self) -> bool {
         self.layout.idx[5].is_some()
+    }
+
+    /// True if the file has this stand column.
+    pub fn has(&self, column: StandColumn) -> bool {
+        self.layout.idx[column.slot()].is_some()
+    }
+
+    /// The stand columns the file has, in [`StandColumn::ALL`] order.
+    pub fn stand_columns(&self) -> Vec<StandColumn> {
+        StandColumn::ALL
+            .into_iter()
+            .filter(|c| self.has(*c))
+            .collect()
     }
 
     /// The column layout (to parse further lines of the same file elsewhere).
@@ -511,25 +674,28 @@ pub fn parse_field(field: &str) -> Option<f64> {
 pub struct TsvWriter<W: Write> {
     out: W,
     flush_each_row: bool,
+    stand: Vec<StandColumn>,
     extra_columns: usize,
+    line: String,
 }
 
 impl<W: Write> TsvWriter<W> {
-    /// Writes the header line.
+    /// Writes the header line of the seed's columns ([`HEADER`]).
     pub fn new(out: W, flush_each_row: bool) -> std::io::Result<Self> {
-        Self::with_extra_columns(out, flush_each_row, &[])
+        Self::with_columns(out, flush_each_row, &[], &[])
     }
 
-    /// Writes the header line with `extra` columns after the standard ones (for example the
-    /// `command` an importer keeps); the reader ignores columns it does not know. Rows then go
-    /// through [`TsvWriter::write_with`].
-    pub fn with_extra_columns(
+    /// Writes the header line: [`HEADER`], the `stand` columns (in the order given), then
+    /// `extra` named columns (for example an importer's `electrical_power`; readers ignore
+    /// columns they do not know). Rows with extra values go through [`TsvWriter::write_with`].
+    pub fn with_columns(
         mut out: W,
         flush_each_row: bool,
+        stand: &[StandColumn],
         extra: &[&str],
     ) -> std::io::Result<Self> {
         let mut header = HEADER.join("\t");
-        for name in extra {
+        for name in stand.iter().map(|c| c.name()).chain(extra.iter().copied()) {
             header.push('\t');
             header.push_str(name);
         }
@@ -540,17 +706,21 @@ impl<W: Write> TsvWriter<W> {
         Ok(TsvWriter {
             out,
             flush_each_row,
+            stand: stand.to_vec(),
             extra_columns: extra.len(),
+            line: String::with_capacity(128),
         })
     }
 
-    /// Writes one row. NaN is written as `nan` (the seed's Python prints the same).
+    /// Writes one row (NaN in any extra column). NaN is written as `nan` (the seed's Python
+    /// prints the same).
     pub fn write(&mut self, row: &Row) -> std::io::Result<()> {
         self.write_with(row, &[])
     }
 
     /// Writes one row and the values of the extra columns (NaN where one is missing).
     pub fn write_with(&mut self, row: &Row, extra: &[f64]) -> std::io::Result<()> {
+        use std::fmt::Write as _;
         let s = &row.sample;
         let fields = [
             row.ts_local,
@@ -560,16 +730,19 @@ impl<W: Write> TsvWriter<W> {
             s.acceleration,
             s.position,
         ];
+        let stand = self.stand.iter().map(|c| row.stand.get(*c));
         let extra = (0..self.extra_columns).map(|k| extra.get(k).copied().unwrap_or(f64::NAN));
-        let mut line = String::with_capacity(96);
-        for (i, v) in fields.into_iter().chain(extra).enumerate() {
+        let line = &mut self.line;
+        line.clear();
+        for (i, v) in fields.into_iter().chain(stand).chain(extra).enumerate() {
             if i > 0 {
                 line.push('\t');
             }
             if v.is_nan() {
                 line.push_str("nan");
             } else {
-                line.push_str(&format!("{v}"));
+                // Writing into a String cannot fail.
+                let _ = write!(line, "{v}");
             }
         }
         line.push('\n');
@@ -692,11 +865,11 @@ mod tests {
             ];
             for text in &cases_in_line {
                 let full = layout.parse_line(text.as_bytes());
-                for convert in [0u8, 0b1_1100, 0b10_0001, ALL_SLOTS] {
+                for convert in [0u16, 0b1_1100, 0b10_0001, ALL_SLOTS] {
                     let part = layout.parse_line_converting(text.as_bytes(), convert);
                     match (&full, &part) {
                         (Ok(Some(a)), Ok(Some(b))) => {
-                            for slot in 0..6 {
+                            for slot in 0..SLOTS {
                                 assert_eq!(a[slot].is_finite(), b[slot].is_finite(), "`{text}`");
                                 if convert & (1 << slot) != 0 {
                                     assert!(
@@ -763,16 +936,16 @@ mod tests {
 
     #[test]
     fn round_trip_and_errors() {
-        let row = Row {
-            ts_local: 1.5,
-            sample: Sample {
+        let row = Row::new(
+            1.5,
+            Sample {
                 t: 0.25,
                 force: -0.125,
                 velocity: 300.0,
                 acceleration: f64::NAN,
                 position: 1e-7,
             },
-        };
+        );
         let mut w = TsvWriter::new(Vec::new(), false).unwrap();
         w.write(&row).unwrap();
         let bytes = w.into_inner().unwrap();
@@ -815,5 +988,82 @@ mod tests {
             TsvReader::new(&b""[..], "e"),
             Err(TsvError::Empty { .. })
         ));
+    }
+
+    /// The stand columns: written when asked for, in the order asked, read by name wherever
+    /// they are, NaN where absent; the seed's columns and extra columns stay where they were.
+    #[test]
+    fn stand_columns_round_trip() {
+        let mut row = Row::new(
+            f64::NAN,
+            Sample {
+                t: 1.0,
+                force: 0.1,
+                velocity: 200.0,
+                acceleration: 3.0,
+                position: f64::NAN,
+            },
+        );
+        row.stand = Stand {
+            thrust: 4.5,
+            voltage: 16.0,
+            current: f64::NAN,
+            command: 0.25,
+        };
+        let columns = [
+            StandColumn::Command,
+            StandColumn::Thrust,
+            StandColumn::Voltage,
+        ];
+        let mut w = TsvWriter::with_columns(Vec::new(), false, &columns, &["power"]).unwrap();
+        w.write_with(&row, &[7.0]).unwrap();
+        let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        assert_eq!(
+            text,
+            "ts_local\tt\tforce\tvelocity\tacceleration\tposition\tcommand\tthrust\tvoltage\tpower\n\
+             nan\t1\t0.1\t200\t3\tnan\t0.25\t4.5\t16\t7\n"
+        );
+        let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+        assert_eq!(
+            r.stand_columns(),
+            [
+                StandColumn::Thrust,
+                StandColumn::Voltage,
+                StandColumn::Command
+            ]
+        );
+        assert!(!r.has(StandColumn::Current));
+        let back = r.next_row().unwrap().unwrap();
+        let s = back.sample;
+        assert_eq!(
+            (s.t, s.force, s.velocity, s.acceleration),
+            (1.0, 0.1, 200.0, 3.0)
+        );
+        assert!(s.position.is_nan());
+        assert_eq!(
+            (back.stand.thrust, back.stand.voltage, back.stand.command),
+            (4.5, 16.0, 0.25)
+        );
+        assert!(back.stand.current.is_nan());
+        // A file of the seed's columns only: every stand value NaN.
+        let mut r = TsvReader::new(
+            "t\tforce\tvelocity\tacceleration\n1\t2\t3\t4\n".as_bytes(),
+            "m",
+        )
+        .unwrap();
+        assert!(r.stand_columns().is_empty());
+        let back = r.next_row().unwrap().unwrap();
+        assert!(StandColumn::ALL.iter().all(|c| back.stand.get(*c).is_nan()));
+        // A stand column that is not a number is named.
+        let mut r = TsvReader::new(
+            "t\tforce\tvelocity\tacceleration\tthrust\n1\t2\t3\t4\t5 gf\n".as_bytes(),
+            "m.tsv",
+        )
+        .unwrap();
+        let e = r.next_row().err().unwrap().to_string();
+        assert!(
+            e.contains("line 2") && e.contains("`thrust`") && e.contains("5 gf"),
+            "{e}"
+        );
     }
 }

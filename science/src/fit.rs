@@ -26,7 +26,7 @@ use std::sync::OnceLock;
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, ALL_SLOTS};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, Values, ALL_SLOTS};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -426,7 +426,7 @@ fn fit_bytes(
     let estimator = total.unwrap_or_default();
     let n = last - first + 1;
     // Rows of the window, in order, with their line numbers.
-    let window_rows = |convert: u8, f: &mut dyn FnMut(u64, &[f64; 6])| {
+    let window_rows = |convert: u16, f: &mut dyn FnMut(u64, &Values)| {
         let (offset, line, skip) = start;
         walk(data, offset, skip, n, &layout, convert, |l, v| {
             f(line + l - 1, v)
@@ -469,8 +469,8 @@ fn walk(
     skip: u64,
     rows: u64,
     layout: &Layout,
-    convert: u8,
-    mut f: impl FnMut(u64, &[f64; 6]),
+    convert: u16,
+    mut f: impl FnMut(u64, &Values),
 ) {
     let (mut skip, mut left) = (skip, rows);
     if left == 0 {

@@ -286,21 +286,12 @@ impl Stand {
     }
 
     /// Runs the excitation (init phase not recorded, like the driver) and calls `sink` with each
-    /// recorded row.
+    /// recorded row (its stand columns filled when a drivetrain is simulated: thrust, bus
+    /// voltage and current, and the duty as `command`).
     pub fn run<E>(
         &mut self,
         excitation: &Excitation,
         mut sink: impl FnMut(Row) -> Result<(), E>,
-    ) -> Result<u64, E> {
-        self.run_with_drivetrain(excitation, |row, _| sink(row))
-    }
-
-    /// [`Stand::run`], handing each row to `sink` with what the drivetrain logs at the same
-    /// instant (`None` without a drivetrain: [`Stand::with_drivetrain`]).
-    pub fn run_with_drivetrain<E>(
-        &mut self,
-        excitation: &Excitation,
-        mut sink: impl FnMut(Row, Option<DrivetrainSample>) -> Result<(), E>,
     ) -> Result<u64, E> {
         let c = self.config;
         let start = self.time + excitation.init_duration;
@@ -329,14 +320,11 @@ impl Stand {
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();
-            let drivetrain = self.measure_drivetrain();
-            sink(
-                Row {
-                    ts_local: 1000.0 + t + delay,
-                    sample,
-                },
-                drivetrain,
-            )?;
+            let mut row = Row::new(1000.0 + t + delay, sample);
+            if let Some(d) = self.measure_drivetrain() {
+                row.stand = d.stand();
+            }
+            sink(row)?;
         }
         Ok(n)
     }

@@ -35,16 +35,15 @@ fn formula_recording(
     let (mut thrust, mut voltage, mut current, mut duty, mut torque) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
     stand
-        .run_with_drivetrain(&excitation, |row, d| {
-            let d = d.expect("drivetrain on");
+        .run(&excitation, |row| {
             rec.time.push(row.sample.t);
             rec.speed.push(row.sample.velocity);
             rec.acceleration.push(row.sample.acceleration);
             torque.push(row.sample.force);
-            thrust.push(d.thrust);
-            voltage.push(d.voltage);
-            current.push(d.current);
-            duty.push(d.duty);
+            thrust.push(row.stand.thrust);
+            voltage.push(row.stand.voltage);
+            current.push(row.stand.current);
+            duty.push(row.stand.command);
             Ok::<(), ()>(())
         })
         .unwrap();

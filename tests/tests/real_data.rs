@@ -218,10 +218,12 @@ fn esc32_f60_remaining_error_is_localized() {
 #[test]
 fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     let (imported, r) = autoquad("esc32v3_f60-1", 1750.0);
-    let duty = imported
-        .command
-        .clone()
-        .expect("the ESC32 log has its duty");
+    // The duty in % (the TSV's `command` is the ratio).
+    let duty: Vec<f64> = imported
+        .stand(propid_io::tsv::StandColumn::Command)
+        .iter()
+        .map(|d| d * 100.0)
+        .collect();
     // Per duty step: its time span, mean speed and Σ F / Σ ω² (the drag law's c2 at that step).
     let step = |d: f64| {
         let rows: Vec<(f64, f64, f64)> = imported

@@ -2,8 +2,10 @@
 
 use std::path::Path;
 
-use super::{column, csv_reader, differentiate, mean_sd, number, open_csv, Imported, UpdateRate};
-use crate::tsv::{Row, Sample};
+use super::{
+    column, csv_reader, differentiate, find_column, mean_sd, number, open_csv, Imported, UpdateRate,
+};
+use crate::tsv::{Row, Sample, Stand, StandColumn};
 use crate::InputError;
 
 /// `YYYY-MM-DD HH:MM:SS:mmm` (the utility's PC timestamp) → seconds since the start of its day
@@ -68,9 +70,10 @@ fn autoquad(
     let (amps, amps_name) = column(&headers, &["Amps"], &file)?;
     let (rpm, rpm_name) = column(&headers, &["RPM"], &file)?;
     let (duty, duty_name) = column(&headers, &["Duty"], &file)?;
+    let volts = find_column(&headers, &["Batt. Volts"]);
     let kt = 60.0 / (std::f64::consts::TAU * kv);
-    // (PC time, bus current, rpm, duty in %)
-    let mut raw: Vec<(f64, f64, f64, f64)> = Vec::new();
+    // (PC time, bus current, rpm, duty in %, bus voltage)
+    let mut raw: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
         let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
@@ -85,6 +88,10 @@ fn autoquad(
             number(&record, amps, &amps_name, &file, line)?,
             number(&record, rpm, &rpm_name, &file, line)?,
             number(&record, duty, &duty_name, &file, line)?,
+            match &volts {
+                Some((i, name)) => number(&record, *i, name, &file, line)?,
+                None => f64::NAN,
+            },
         ));
     }
     let n = raw.len();
@@ -117,8 +124,7 @@ fn autoquad(
         .fold(0.0, f64::max);
 
     let mut rows = Vec::with_capacity(n);
-    let mut command = Vec::with_capacity(n);
-    for (k, &(_, i_bus, r, d)) in raw.iter().enumerate() {
+    for (k, &(_, i_bus, r, d, v)) in raw.iter().enumerate() {
         let d = d / 100.0;
         // Phase current ≈ I_bus / duty; undefined at zero duty.
         let force = if d > 0.0 { kt * i_bus / d } else { f64::NAN };
@@ -131,8 +137,13 @@ fn autoquad(
                 acceleration: f64::NAN,
                 position: f64::NAN,
             },
+            stand: Stand {
+                voltage: v,
+                current: i_bus,
+                command: d,
+                ..Stand::NONE
+            },
         });
-        command.push(d * 100.0);
     }
     differentiate(&mut rows);
 
@@ -141,7 +152,7 @@ fn autoquad(
         UpdateRate::measure(
             raw.iter()
                 .enumerate()
-                .map(|(k, r)| (k as f64 * dt, [r.1, r.2, r.3][col])),
+                .map(|(k, r)| (k as f64 * dt, [r.1, r.2, r.3, r.4][col])),
         )
         .describe(n)
     };
@@ -181,9 +192,9 @@ fn autoquad(
             scatter * 1e3
         ),
         format!("torque = Kt·I_bus/duty with Kt = 60/(2π·kv) = {kt:.4e} N·m/A (nominal, from kv): phase current ≈ bus current / duty; NaN at zero duty; this torque includes the motor's own friction"),
-        format!("`{amps_name}` (bus current) {}", rate(0)),
+        format!("current = `{amps_name}` (the DC bus current the ESC reports) [A], kept as the TSV column `current`; it {}", rate(0)),
         format!("velocity = `{rpm_name}`·2π/60 (mechanical rpm from the commutation period); it {}", rate(1)),
-        format!("command = `{duty_name}` [%] (the duty the ESC applied), kept as the TSV column `command`; it {}", rate(2)),
+        format!("command = `{duty_name}` / 100 (the duty the ESC applied, logged in %), kept as the TSV column `command` (ratio 0–1); it {}", rate(2)),
         "acceleration = central difference of the velocity (no smoothing)".into(),
     ];
     assumptions.push(if steady.is_empty() {
@@ -204,9 +215,21 @@ fn autoquad(
     } else {
         "zero offset: no rows at zero speed, so the current sensor's zero cannot be checked".into()
     });
+    let mut stand_columns = vec![StandColumn::Current, StandColumn::Command];
+    match &volts {
+        Some((_, name)) => {
+            assumptions.push(format!(
+                "voltage = `{name}` (the DC bus voltage the ESC reports) [V], kept as the TSV column `voltage`; it {}",
+                rate(3)
+            ));
+            stand_columns.insert(0, StandColumn::Voltage);
+        }
+        None => assumptions.push("voltage: no `Batt. Volts` column; no voltage column".into()),
+    }
     Ok(Imported {
         rows,
-        command: Some(command),
+        stand_columns,
+        extra: Vec::new(),
         assumptions,
     })
 }

@@ -12,9 +12,12 @@
 //! states a fact of one particular data set: every figure in them is computed from the file.
 //! They never smooth, shift or filter a signal, so what `diagnose` finds is in the data. The one
 //! derived column is the acceleration, a plain central difference of the measured velocity
-//! ((ω[k+1] − ω[k−1]) / (t[k+1] − t[k−1])), because neither stand logs one. The command the
-//! stand gave (ESC signal, duty) is kept as an extra TSV column `command`: the input is evidence
-//! too.
+//! ((ω[k+1] − ω[k−1]) / (t[k+1] − t[k−1])), because neither stand logs one. What else the stand
+//! measured is kept in the TSV's stand columns ([`crate::tsv::Stand`]): thrust (converted to N
+//! from the unit its header names), DC bus voltage and current, and the command the stand gave
+//! (ESC signal, duty) as a ratio 0–1 — the input is evidence too. Other measured columns worth
+//! keeping (the stand's electrical and mechanical power, the raw ESC signal in µs) become extra
+//! TSV columns ([`Imported::extra`]). Each kept column's update rate is measured and reported.
 //!
 //! Bad input is an [`InputError`] naming the file, the line and the column: a field that is not
 //! a number, or a row too short to have the column at all. An empty field is a missing sample
@@ -25,21 +28,41 @@ mod rcbench;
 
 use std::path::Path;
 
-use crate::tsv::{Row, TsvWriter};
+use crate::tsv::{Row, StandColumn, TsvWriter};
 use crate::InputError;
 
 pub use autoquad::{import_autoquad, read_autoquad};
 pub use rcbench::{import_rcbench, read_rcbench, RcbenchOptions};
 
-/// An imported recording: the rows, the command column and what was measured and assumed.
+/// An imported recording: the rows, what the stand measured beside them and what was measured
+/// and assumed.
 pub struct Imported {
-    /// Rows in time order.
+    /// Rows in time order, with [`Row::stand`] filled from the log's thrust, voltage, current and
+    /// command columns (NaN where not logged).
     pub rows: Vec<Row>,
-    /// The command the stand gave at each row (ESC signal, duty…; NaN where not logged), when
-    /// the log has one. Its unit is stated in [`Imported::assumptions`].
-    pub command: Option<Vec<f64>>,
+    /// The stand columns the log has (written to the TSV), in [`StandColumn::ALL`] order. Their
+    /// units and conversions are stated in [`Imported::assumptions`].
+    pub stand_columns: Vec<StandColumn>,
+    /// Other measured columns kept as extra TSV columns, one value per row.
+    pub extra: Vec<ExtraColumn>,
     /// Measurements, assumptions and conversions, one sentence each.
     pub assumptions: Vec<String>,
+}
+
+/// A column an importer keeps beyond the TSV's known ones (readers ignore it).
+pub struct ExtraColumn {
+    /// The TSV header name (`electrical_power`, …), with its unit in the name or the
+    /// importer's assumptions.
+    pub name: &'static str,
+    /// One value per row (NaN where not logged).
+    pub values: Vec<f64>,
+}
+
+impl Imported {
+    /// The values of one stand column, one per row.
+    pub fn stand(&self, column: StandColumn) -> Vec<f64> {
+        self.rows.iter().map(|r| r.stand.get(column)).collect()
+    }
 }
 
 /// Fills the acceleration column with the central difference of the velocity (one-sided at the
@@ -234,22 +257,17 @@ pub(crate) fn number(
     })
 }
 
-/// Writes an imported recording as propid's TSV (with a `command` column when it has one).
+/// Writes an imported recording as propid's TSV: the seed's columns, the stand columns the log
+/// has, then the extra columns.
 pub fn write_tsv<W: std::io::Write>(imported: &Imported, out: W) -> std::io::Result<W> {
-    match &imported.command {
-        Some(command) => {
-            let mut w = TsvWriter::with_extra_columns(out, false, &["command"])?;
-            for (r, c) in imported.rows.iter().zip(command) {
-                w.write_with(r, &[*c])?;
-            }
-            w.into_inner()
+    let names: Vec<&str> = imported.extra.iter().map(|c| c.name).collect();
+    let mut w = TsvWriter::with_columns(out, false, &imported.stand_columns, &names)?;
+    let mut extra = vec![f64::NAN; names.len()];
+    for (k, r) in imported.rows.iter().enumerate() {
+        for (v, c) in extra.iter_mut().zip(&imported.extra) {
+            *v = c.values.get(k).copied().unwrap_or(f64::NAN);
         }
-        None => {
-            let mut w = TsvWriter::new(out, false)?;
-            for r in &imported.rows {
-                w.write(r)?;
-            }
-            w.into_inner()
-        }
+        w.write_with(r, &extra)?;
     }
+    w.into_inner()
 }

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use memmap2::Mmap;
 use propid_core::estimate::LoadEstimator;
-use propid_io::tsv::{Layout, RowError};
+use propid_io::tsv::{Layout, RowError, Values};
 
 /// Rows per block at first (small in tests, so that they merge blocks and cut inside them).
 const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
@@ -19,7 +19,7 @@ const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
 const MAX_BLOCKS: usize = if cfg!(test) { 8 } else { 1024 };
 /// The slots the fit converts: force, velocity, acceleration. The others (ts_local, t,
 /// position) are checked, and t's finiteness kept, without the cost of a float conversion.
-pub(super) const FIT_SLOTS: u8 = 0b1_1100;
+pub(super) const FIT_SLOTS: u16 = 0b1_1100;
 /// Pages behind the scan are dropped from the mapping every this many bytes (peak RSS).
 const RELEASE_BYTES: usize = 8 << 20;
 
@@ -62,7 +62,7 @@ pub(super) struct Chunk {
 }
 
 /// The first of t, force, velocity, acceleration that is not finite, if any.
-pub(super) fn incomplete(v: &[f64; 6]) -> Option<&'static str> {
+pub(super) fn incomplete(v: &Values) -> Option<&'static str> {
     const NAMES: [&str; 4] = ["t", "force", "velocity", "acceleration"];
     (1..5).find(|i| !v[*i].is_finite()).map(|i| NAMES[i - 1])
 }

@@ -183,6 +183,18 @@ pub struct DrivetrainSample {
     pub duty: f64,
 }
 
+impl DrivetrainSample {
+    /// As the TSV's stand columns: the duty is the `command` (ratio).
+    pub fn stand(&self) -> propid_io::tsv::Stand {
+        propid_io::tsv::Stand {
+            thrust: self.thrust,
+            voltage: self.voltage,
+            current: self.current,
+            command: self.duty,
+        }
+    }
+}
+
 /// The true electrical state at a speed and a torque.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Electrical {
