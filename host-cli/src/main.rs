@@ -33,6 +33,11 @@ enum Command {
     Plan(propid::cmd::plan::Args),
     /// Write one self-contained HTML report of a recording: fit, diagnosis, interactive plots.
     Report(propid::cmd::report::Args),
+    /// Propeller and motor from a stand's log: C_T and C_Q over speed, thrust per watt, figure of
+    /// merit, Kv, resistance, no-load current, efficiency.
+    Propulsion(propid::cmd::propulsion::Args),
+    /// Size the drivetrain: speed, torque, power, current, DC link and battery for a thrust.
+    Size(propid::cmd::size::Args),
     /// Find Telega drives on the bus, check their registers for identification, fix and store them.
     Telega(propid::cmd::telega::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
@@ -53,6 +58,8 @@ fn main() -> ExitCode {
         Command::Report(a) => propid::cmd::report::run(a),
         Command::Demo(a) => propid::cmd::demo::run(a),
         Command::Telega(a) => propid::cmd::telega::run(a),
+        Command::Propulsion(a) => propid::cmd::propulsion::run(a),
+        Command::Size(a) => propid::cmd::size::run(a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

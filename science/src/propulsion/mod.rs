@@ -37,7 +37,9 @@ pub mod law;
 pub mod motor;
 pub mod plateau;
 pub mod quantity;
+pub mod read;
 pub mod size;
+pub mod text;
 pub mod units;
 
 use serde::{Deserialize, Serialize};

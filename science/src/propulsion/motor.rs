@@ -99,6 +99,9 @@ pub struct Motor {
     pub method: super::Method,
 }
 
+/// Why nothing is checked against a torque computed from the current.
+const COMPUTED_TORQUE: &str = "the torque column is proportional to the motor current (it was computed from it, as an ESC log's Kt·I/duty is): K_t, the no-load current and the losses cannot be checked against it";
+
 fn no_duty() -> String {
     "no duty column: the back-EMF equation needs the motor's voltage d·V_bus (an ESC log's duty, \
      or `command` when it is the duty)"
@@ -136,7 +139,7 @@ fn back_emf_plateaus(plateaus: &[Plateau]) -> Result<(Quantity, Quantity, f64, u
 }
 
 /// K_t and I_0 from plateaus: I_m = Q/K_t + I_0.
-fn torque_current_plateaus(plateaus: &[Plateau]) -> (Quantity, Quantity) {
+fn torque_current_plateaus(plateaus: &[Plateau]) -> TorqueCurrent {
     let pts: Vec<(f64, f64)> = plateaus
         .iter()
         .filter_map(|p| {
@@ -147,11 +150,16 @@ fn torque_current_plateaus(plateaus: &[Plateau]) -> (Quantity, Quantity) {
     torque_current(&pts, "steady plateau")
 }
 
-fn torque_current(pts: &[(f64, f64)], what: &str) -> (Quantity, Quantity) {
+/// K_t, I_0, and whether the torque was computed from the current (then nothing electrical can
+/// be checked against it).
+type TorqueCurrent = (Quantity, Quantity, bool);
+
+fn torque_current(pts: &[(f64, f64)], what: &str) -> TorqueCurrent {
     let cj = |r: String| {
         (
             Quantity::cannot_judge("N·m/A", r.clone()),
             Quantity::cannot_judge("A", r),
+            false,
         )
     };
     if pts.len() < 3 {
@@ -169,14 +177,14 @@ fn torque_current(pts: &[(f64, f64)], what: &str) -> (Quantity, Quantity) {
     };
     let mean_i = pts.iter().map(|p| p.1.abs()).sum::<f64>() / pts.len() as f64;
     if s.rms < 1e-6 * mean_i {
-        return cj(
-            "the torque column is proportional to the current (it was computed from it, as an ESC log's Kt·I/duty is): K_t cannot be checked against it".into(),
-        );
+        let (kt, i0, _) = cj(COMPUTED_TORQUE.into());
+        return (kt, i0, true);
     }
     let slope = s.theta[0];
     (
         Quantity::judge(1.0 / slope, s.stderr[0] / (slope * slope), "N·m/A"),
         Quantity::judge_relative(s.theta[1], s.stderr[1], "A", 0.5),
+        false,
     )
 }
 
@@ -282,22 +290,28 @@ pub fn from_plateaus(rec: &Recording, plateaus: &[Plateau]) -> Result<Motor, Str
             0,
         ),
     };
-    let (kt, no_load_current) = if rec.torque.is_none() {
+    let (kt, no_load_current, computed) = if rec.torque.is_none() {
         let why = "no torque column: K_t needs the shaft torque".to_string();
         (
             Quantity::cannot_judge("N·m/A", why.clone()),
             Quantity::cannot_judge("A", why),
+            false,
         )
     } else if rec.duty.is_none() {
         (
             Quantity::cannot_judge("N·m/A", no_duty()),
             Quantity::cannot_judge("A", no_duty()),
+            false,
         )
     } else {
         torque_current_plateaus(plateaus)
     };
-    let losses = power_balance(plateaus)
-        .or_else(|| losses_from_constants(&kt, &no_load_current, &resistance, points));
+    let losses = if computed {
+        None
+    } else {
+        power_balance(plateaus)
+            .or_else(|| losses_from_constants(&kt, &no_load_current, &resistance, points))
+    };
     Ok(Motor {
         kv,
         resistance,

@@ -263,15 +263,26 @@ pub(crate) fn noise_of(x: &[f64]) -> f64 {
 }
 
 /// Mean and standard error of the independent samples in `values` (a held value repeated in
-/// consecutive rows counts once). `None` with fewer than three.
+/// consecutive rows counts once). A value held throughout (at least three rows) has a standard
+/// error of 0; otherwise `None` with fewer than three independent samples.
 pub fn mean_of(values: impl Iterator<Item = f64>) -> Option<Mean> {
     let mut v: Vec<f64> = Vec::new();
+    let mut raw = 0usize;
     for x in values.filter(|x| x.is_finite()) {
+        raw += 1;
         if v.last() != Some(&x) {
             v.push(x);
         }
     }
     let n = v.len();
+    if n == 1 && raw >= 3 {
+        // A value held throughout (a command, a quantised reading): no scatter to measure.
+        return Some(Mean {
+            value: v[0],
+            stderr: 0.0,
+            samples: 1,
+        });
+    }
     if n < 3 {
         return None;
     }
@@ -518,6 +529,7 @@ mod tests {
         let m = mean_of([1.0, 1.0, 1.0, 2.0, 2.0, 3.0, 3.0, 3.0].into_iter()).unwrap();
         assert_eq!(m.samples, 3);
         assert!((m.value - 2.0).abs() < 1e-12);
-        assert!(mean_of([1.0, 1.0, 1.0].into_iter()).is_none());
+        assert_eq!(mean_of([1.0, 1.0, 1.0].into_iter()).unwrap().stderr, 0.0);
+        assert!(mean_of([1.0, 2.0].into_iter()).is_none());
     }
 }

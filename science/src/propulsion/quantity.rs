@@ -195,18 +195,28 @@ impl Quantity {
                 value,
                 stderr,
                 unit,
-            } => format!("{} {unit}", plus_minus(*value, *stderr)),
+            } => format!("{}{}", plus_minus(*value, *stderr), with_unit(unit)),
             Quantity::NotIdentified {
                 value,
                 stderr,
                 unit,
                 reason,
             } => format!(
-                "{} {unit} (not identified: {reason})",
-                plus_minus(*value, *stderr)
+                "{}{} (not identified: {reason})",
+                plus_minus(*value, *stderr),
+                with_unit(unit)
             ),
             Quantity::CannotJudge { reason, .. } => format!("cannot judge: {reason}"),
         }
+    }
+}
+
+/// " N·m", or nothing for a dimensionless "1".
+fn with_unit(unit: &str) -> String {
+    if unit == "1" || unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
     }
 }
 
