@@ -5,7 +5,7 @@
 use propid_io::import::{import_autoquad, import_rcbench, write_tsv, RcbenchOptions};
 use propid_science::propulsion::read::{read, ReadOptions};
 use propid_science::propulsion::{
-    identify, Air, MethodChoice, Options, PlateauOptions, Propulsion,
+    identify, Air, MethodChoice, Options, PlateauOptions, Propulsion, Quantity,
 };
 
 const D: f64 = 0.1778;
@@ -54,64 +54,267 @@ fn rcbench(name: &str) -> Propulsion {
     identify(&through_tsv(&imported, false), &options(Some(12_000.0))).unwrap()
 }
 
-#[test]
-#[ignore]
-fn explore() {
-    for name in [
+/// `value` printed with `decimals` decimals reads `printed`.
+#[track_caller]
+fn printed(what: &str, value: f64, printed: f64, decimals: i32) {
+    let half = 0.5 * 10f64.powi(-decimals) * (1.0 + 1e-9);
+    assert!(
+        (value - printed).abs() <= half,
+        "{what}: measured {value}, the docs print {printed}"
+    );
+}
+
+fn q(x: &Quantity) -> (f64, f64) {
+    (
+        x.identified()
+            .unwrap_or_else(|| panic!("not identified: {}", x.describe())),
+        x.stderr().unwrap(),
+    )
+}
+
+/// (log, motor, C_T ± s.e., C_Q ± s.e., T·D/Q ± s.e.) at 12 000 rpm, as docs/PROPULSION.md §3 prints them.
+const TABLE: [(&str, &str, [f64; 2], [f64; 2], [f64; 2]); 6] = [
+    (
         "2019-11-05_171350",
+        "F40",
+        [0.1403, 0.0021],
+        [0.010868, 0.000022],
+        [12.91, 0.20],
+    ),
+    (
         "2019-11-07_174807",
+        "F60",
+        [0.14170, 0.00057],
+        [0.010794, 0.000046],
+        [13.128, 0.077],
+    ),
+    (
         "2019-11-07_175456",
+        "F60",
+        [0.14178, 0.00066],
+        [0.010819, 0.000043],
+        [13.105, 0.080],
+    ),
+    (
         "2019-11-07_184325",
+        "F60",
+        [0.14255, 0.00068],
+        [0.010732, 0.000039],
+        [13.283, 0.079],
+    ),
+    (
         "2019-11-07_211050",
+        "F60",
+        [0.14135, 0.00084],
+        [0.010876, 0.000088],
+        [13.00, 0.13],
+    ),
+    (
         "2019-11-09_181347",
-    ] {
+        "F80",
+        [0.1348, 0.0018],
+        [0.01025, 0.00011],
+        [13.16, 0.22],
+    ),
+];
+
+/// Decimals of a figure printed with two significant digits of its standard error.
+fn decimals(stderr: f64) -> i32 {
+    1 - stderr.log10().floor() as i32
+}
+
+#[test]
+fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
+    let mut got = Vec::new();
+    for (name, _, ct, cq, ratio) in TABLE {
         let p = rcbench(name);
-        let t = p.thrust.as_ref().unwrap();
-        let q = p.torque.as_ref().unwrap();
-        let perf = p.performance.as_ref().unwrap();
-        eprintln!("{name}: plateaus {} C_T {} p {} quad {} | C_Q {} p {} quad {} | FM {} T/Q {} | zero {}", p.operating_points.len(), t.at_reference.describe(), t.exponent.describe(), t.quadratic.describe(), q.at_reference.describe(), q.exponent.describe(), q.quadratic.describe(), perf.figure_of_merit.describe(), perf.thrust_torque_ratio.describe(), t.zero);
-        for b in &t.bands {
-            eprintln!(
-                "    {:.0}-{:.0} rpm: {} plateaus C_T {} Re {:.3e} M {:.3} agrees {}",
-                b.from * 60.0,
-                b.to * 60.0,
-                b.plateaus,
-                b.coefficient.describe(),
-                b.reynolds,
-                b.tip_mach,
-                b.law_agrees
-            );
-        }
-        if let Some(m) = &p.motor {
-            eprintln!(
-                "   motor: kv {} R {} losses {:?}",
-                m.kv.describe(),
-                m.resistance.describe(),
-                m.losses
-                    .as_ref()
-                    .map(|l| (l.friction_torque.describe(), l.copper.describe()))
-            );
-        } else {
-            eprintln!("   no motor: {:?}", p.motor_absent);
-        }
-        for w in &p.warnings {
-            eprintln!("   warning: {w}");
-        }
-    }
-    for (file, kv) in [("f40_steps_5-2.csv", 1600.0), ("esc32v3_f60-1.csv", 1750.0)] {
-        let imported = import_autoquad(&data(&format!("autoquad/{file}")), kv).unwrap();
-        let rec = through_tsv(&imported, true);
-        let p = identify(&rec, &options(None)).unwrap();
-        let m = p.motor.as_ref().unwrap();
-        eprintln!(
-            "{file}: plateaus {} kv {} R {} rms {:?} points {} kt {} I0 {}",
-            p.operating_points.len(),
-            m.kv.describe(),
-            m.resistance.describe(),
-            m.back_emf_rms,
-            m.back_emf_points,
-            m.kt.describe(),
-            m.no_load_current.describe()
+        assert!(
+            p.warnings
+                .iter()
+                .all(|w| !w.contains("outside what propellers have")),
+            "{:?}",
+            p.warnings
         );
+        let t = q(&p.thrust.as_ref().unwrap().at_reference);
+        let c = q(&p.torque.as_ref().unwrap().at_reference);
+        let r = q(&p.performance.as_ref().unwrap().thrust_torque_ratio);
+        for (what, v, doc) in [("C_T", t, ct), ("C_Q", c, cq), ("T·D/Q", r, ratio)] {
+            printed(&format!("{name} {what}"), v.0, doc[0], decimals(doc[1]));
+            printed(
+                &format!("{name} {what} s.e."),
+                v.1,
+                doc[1],
+                decimals(doc[1]),
+            );
+        }
+        got.push((t, c, r));
+    }
+    // Agreement. The four F60 runs of one day (one motor and propeller, four ESCs) differ by more
+    // than their standard errors: their standard deviation is the run-to-run reproducibility,
+    // added to each run's own error. Against the F60 runs' mean, the F40 run agrees within two
+    // standard errors in C_T, C_Q and T·D/Q; the F80 run of 11-09 is lower in C_T and C_Q by more
+    // than three, by the same factor in both, and its density-free T·D/Q agrees.
+    let pick = |g: &((f64, f64), (f64, f64), (f64, f64)), k: usize| [g.0, g.1, g.2][k];
+    let stats = |k: usize| {
+        let v: Vec<f64> = got[1..5].iter().map(|g| pick(g, k).0).collect();
+        let m = v.iter().sum::<f64>() / 4.0;
+        let sd = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / 3.0).sqrt();
+        (m, sd)
+    };
+    let z = |i: usize, k: usize| {
+        let (m, sd) = stats(k);
+        let (v, e) = pick(&got[i], k);
+        (v - m).abs() / (e * e + sd * sd + sd * sd / 4.0).sqrt()
+    };
+    for k in 0..3 {
+        assert!(
+            z(0, k) < 2.0,
+            "F40, quantity {k}: {:.1} σ from the F60 runs",
+            z(0, k)
+        );
+    }
+    assert!(
+        z(5, 0) > 3.0 && z(5, 1) > 3.0,
+        "the F80's C_T, C_Q: {:.1}, {:.1} σ",
+        z(5, 0),
+        z(5, 1)
+    );
+    assert!(z(5, 2) < 2.0, "the F80's T·D/Q: {:.1} σ", z(5, 2));
+    printed(
+        "F60 reproducibility of C_T [%]",
+        100.0 * stats(0).1 / stats(0).0,
+        0.36,
+        2,
+    );
+    printed(
+        "F60 reproducibility of C_Q [%]",
+        100.0 * stats(1).1 / stats(1).0,
+        0.55,
+        2,
+    );
+    let (ct60, _) = stats(0);
+    let (cq60, _) = stats(1);
+    let (ct80, cq80) = (got[5].0 .0, got[5].1 .0);
+    printed("F80/F60 C_T", ct80 / ct60, 0.951, 3);
+    printed("F80/F60 C_Q", cq80 / cq60, 0.949, 3);
+}
+
+/// Published static coefficients, UIUC Propeller Database (J. B. Brandt, R. W. Deters,
+/// G. K. Ananda, O. D. Dantsker and M. S. Selig, University of Illinois at Urbana-Champaign,
+/// https://m-selig.ae.illinois.edu/props/propDB.html), as compiled in the CSV files
+/// `volume1_exp.csv` and `volume2_exp.csv` of github.com/Piotrek2133/Drone-Propellers-Optimizer
+/// (commit 77bd2293f675f9e2483ed68dcdb80fa280f0e01a), rows with J = 0:
+/// (name, blades, diameter [in], rpm, C_T, C_P).
+const UIUC: [(&str, u32, f64, f64, f64, f64); 2] = [
+    // Vol. 1, APC Sport 7×6, static, its fastest row.
+    ("APC Sport 7x6", 2, 7.0, 7002.0, 0.0953, 0.0723),
+    // Vol. 2, DA4052 9×6.75, three blades, static, its fastest row.
+    (
+        "DA4052 9x6.75 (3 blades)",
+        3,
+        9.0,
+        5700.0,
+        0.145621,
+        0.081547,
+    ),
+];
+
+#[test]
+fn the_t7056_against_published_static_coefficients() {
+    use propid_science::propulsion::{figure_of_merit, Kind, TAU};
+    // The 18:43 run (F60, ESC32v3): the widest speed range of the six.
+    let p = rcbench("2019-11-07_184325");
+    let at = |rpm: f64| {
+        let n = rpm / 60.0;
+        let t = p.thrust.as_ref().unwrap().law.unwrap();
+        let q = p.torque.as_ref().unwrap().law.unwrap();
+        let ct = t.value(n) / Kind::Thrust.scale(1.225, n, D);
+        let cp = TAU * q.value(n) / Kind::Torque.scale(1.225, n, D);
+        (ct, cp, figure_of_merit(ct, cp / TAU))
+    };
+    // At the APC's speed on the same diameter: the same Reynolds and tip Mach numbers.
+    let (name, blades, _, rpm, ct_apc, cp_apc) = UIUC[0];
+    let (ct, cp, fm) = at(rpm);
+    printed("T7056 C_T at 7002 rpm", ct, 0.1262, 4);
+    printed("T7056 C_P at 7002 rpm", cp, 0.0653, 4);
+    printed("T7056 FM at 7002 rpm", fm, 0.547, 3);
+    printed(
+        &format!("{name} FM"),
+        figure_of_merit(ct_apc, cp_apc / TAU),
+        0.325,
+        3,
+    );
+    // Per blade: C_T within 12 %, C_P 40 % lower.
+    printed(
+        "C_T per blade, T7056/APC",
+        (ct / 3.0) / (ct_apc / f64::from(blades)),
+        0.883,
+        3,
+    );
+    printed(
+        "C_P per blade, T7056/APC",
+        (cp / 3.0) / (cp_apc / f64::from(blades)),
+        0.602,
+        3,
+    );
+    // At the DA4052's rotational Reynolds number ρ·n·D²/μ: n·D² equal.
+    let (_, _, d_in, rpm, ct_da, cp_da) = UIUC[1];
+    let rpm_same_re = rpm * (d_in / 7.0).powi(2);
+    printed("speed of equal Re_D [rpm]", rpm_same_re, 9422.0, 0);
+    let (ct, cp, fm) = at(rpm_same_re);
+    printed("T7056 C_T there", ct, 0.1350, 4);
+    printed("T7056 C_P there", cp, 0.0665, 4);
+    printed("T7056 FM there", fm, 0.595, 3);
+    printed("DA4052 FM", figure_of_merit(ct_da, cp_da / TAU), 0.544, 3);
+    // Electrical rpm with 7 pole pairs would give C_T 49 times smaller: no propeller has that.
+    assert!(
+        propid_science::propulsion::plausibility(Kind::Thrust, ct / 49.0, D)
+            .is_some_and(|w| w.contains("electrical") && w.contains("has 7, which gives 0.1350"))
+    );
+}
+
+#[test]
+fn esc32_kv_from_back_emf_against_the_importers_kv() {
+    for (file, kv_given, kv, kv_se, r, r_se, rms, sigmas) in [
+        (
+            "f40_steps_5-2.csv",
+            1600.0,
+            2083.0,
+            58.0,
+            0.2474,
+            0.0098,
+            0.122,
+            8.4,
+        ),
+        (
+            "esc32v3_f60-1.csv",
+            1750.0,
+            2084.0,
+            112.0,
+            0.230,
+            0.018,
+            0.219,
+            3.0,
+        ),
+    ] {
+        let imported = import_autoquad(&data(&format!("autoquad/{file}")), kv_given).unwrap();
+        let p = identify(&through_tsv(&imported, true), &options(None)).unwrap();
+        let m = p.motor.as_ref().unwrap();
+        let (k, ks) = q(&m.kv);
+        let (res, rs) = q(&m.resistance);
+        printed(&format!("{file} Kv"), k, kv, 0);
+        printed(&format!("{file} Kv s.e."), ks, kv_se, 0);
+        printed(&format!("{file} R"), res, r, decimals(r_se));
+        printed(&format!("{file} R s.e."), rs, r_se, decimals(r_se));
+        printed(&format!("{file} residual"), m.back_emf_rms.unwrap(), rms, 3);
+        // How many standard errors the --kv given lies below the back-EMF's.
+        printed(
+            &format!("{file} (Kv − --kv)/s.e."),
+            (k - kv_given) / ks,
+            sigmas,
+            1,
+        );
+        // The importer's torque (K_t·I/duty from --kv) is recognised as computed from the current.
+        assert!(m.kt.identified().is_none() && m.losses.is_none());
     }
 }

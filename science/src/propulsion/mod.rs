@@ -336,10 +336,14 @@ pub fn plausibility(kind: Kind, c: f64, diameter: f64) -> Option<String> {
     if fits((TAU / 60.0).powi(2)) {
         causes.push("the speed is in rad/s but read as rpm (9.55 times too slow)".into());
     }
-    if let Some(p) = (2..=21).find(|p: &i32| fits(f64::from(*p * *p))) {
+    let pairs: Vec<i32> = (2..=21)
+        .filter(|p: &i32| fits(f64::from(*p * *p)))
+        .collect();
+    if let (Some(lo), Some(hi)) = (pairs.first(), pairs.last()) {
         causes.push(format!(
-            "the speed is electrical, not mechanical: an electrical rpm is the mechanical times the pole pairs (with {p} pole pairs, C would be {:.3}); give `--pole-pairs`",
-            c * f64::from(p * p)
+            "the speed is electrical, not mechanical: an electrical rpm is the mechanical times the motor's pole pairs ({lo}–{hi} pole pairs would put {} in range; a common 14-pole outrunner has 7, which gives {:.4}); give `--pole-pairs`",
+            kind.symbol(),
+            c * 49.0
         ));
     }
     Some(format!(
