@@ -73,7 +73,13 @@ fn q(x: &Quantity) -> (f64, f64) {
 }
 
 /// (log, motor, C_T ± s.e., C_Q ± s.e., T·D/Q ± s.e.) at 12 000 rpm, as docs/PROPULSION.md §3 prints them.
-const TABLE: [(&str, &str, [f64; 2], [f64; 2], [f64; 2]); 6] = [
+/// A value and its standard error.
+type Pm = [f64; 2];
+
+/// A row of the table: log, motor, C_T, C_Q, T·D/Q.
+type LogRow = (&'static str, &'static str, Pm, Pm, Pm);
+
+const TABLE: [LogRow; 6] = [
     (
         "2019-11-05_171350",
         "F40",
@@ -147,14 +153,14 @@ fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
                 decimals(doc[1]),
             );
         }
-        got.push((t, c, r));
+        got.push([t, c, r]);
     }
     // Agreement. The four F60 runs of one day (one motor and propeller, four ESCs) differ by more
     // than their standard errors: their standard deviation is the run-to-run reproducibility,
     // added to each run's own error. Against the F60 runs' mean, the F40 run agrees within two
     // standard errors in C_T, C_Q and T·D/Q; the F80 run of 11-09 is lower in C_T and C_Q by more
     // than three, by the same factor in both, and its density-free T·D/Q agrees.
-    let pick = |g: &((f64, f64), (f64, f64), (f64, f64)), k: usize| [g.0, g.1, g.2][k];
+    let pick = |g: &[(f64, f64); 3], k: usize| g[k];
     let stats = |k: usize| {
         let v: Vec<f64> = got[1..5].iter().map(|g| pick(g, k).0).collect();
         let m = v.iter().sum::<f64>() / 4.0;
@@ -194,7 +200,7 @@ fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
     );
     let (ct60, _) = stats(0);
     let (cq60, _) = stats(1);
-    let (ct80, cq80) = (got[5].0 .0, got[5].1 .0);
+    let (ct80, cq80) = (got[5][0].0, got[5][1].0);
     printed("F80/F60 C_T", ct80 / ct60, 0.951, 3);
     printed("F80/F60 C_Q", cq80 / cq60, 0.949, 3);
 }
