@@ -411,6 +411,8 @@ pub struct Coefficient {
     pub bands: Vec<Band>,
     /// The load cell's zero as used, described.
     pub zero: String,
+    /// The zero fitted with the law when it was not measured at rest [N or N·m].
+    pub fitted_zero: Option<Quantity>,
     /// The load cell's lag (dynamic method) [s].
     pub sensor_lag: Option<Quantity>,
 }
@@ -568,6 +570,8 @@ pub fn coefficient_from_points(
         speed_dependent,
         bands,
         zero: zero_description,
+        fitted_zero: fitted
+            .map(|(z, se)| Quantity::judge_relative(z, se, kind.unit(), f64::INFINITY)),
         sensor_lag: None,
     }
 }

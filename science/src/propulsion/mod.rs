@@ -406,13 +406,51 @@ pub fn identify(rec: &Recording, options: &Options) -> Result<Propulsion, String
             .filter(|p| p.voltage.is_some() && p.current.is_some())
             .count()
             >= 3;
+        // The torque against the current needs the torque's zero: where it was fitted with the
+        // law (no rest to measure it at), it is taken off here too.
+        let fitted_zero = torque.as_ref().and_then(|c| c.fitted_zero.as_ref());
+        let torque_zero = fitted_zero.and_then(Quantity::value).unwrap_or(0.0);
+        let zero_stderr = fitted_zero.and_then(Quantity::stderr).unwrap_or(0.0);
         let m = if use_plateaus(enough) {
-            motor::from_plateaus(rec, &steady.plateaus)
+            let mut plateaus = steady.plateaus.clone();
+            for p in &mut plateaus {
+                if let Some(q) = &mut p.torque {
+                    q.value -= torque_zero;
+                }
+            }
+            motor::from_plateaus(rec, &plateaus)
         } else {
-            motor::from_dynamic(rec)
+            let mut corrected = rec.clone();
+            if let Some(q) = &mut corrected.torque {
+                q.iter_mut().for_each(|x| *x -= torque_zero);
+            }
+            motor::from_dynamic(&corrected)
         };
         match m {
-            Ok(m) => (Some(m), None),
+            Ok(mut m) => {
+                // I_m = (Q − Q₀)/K_t + I_0: only I_0 − Q₀/K_t is measured, so without the
+                // torque's zero Q₀ measured at rest (it was fitted with the law, whose shape alone
+                // separates the two) I_0 and the friction torque are not identified.
+                if fitted_zero.is_some() {
+                    let why = "the torque cell's zero was not measured at rest (no rows at rest before and after the run), and I_m = (Q − Q₀)/K_t + I_0 gives only I_0 − Q₀/K_t: record a few seconds at rest before and after";
+                    let total = |q: &Quantity, scale: f64| match (q.value(), q.stderr()) {
+                        (Some(v), Some(se)) => Quantity::judge_relative(
+                            v,
+                            (se * se + (zero_stderr * scale).powi(2)).sqrt(),
+                            q.unit(),
+                            f64::INFINITY,
+                        )
+                        .not_identified(why),
+                        _ => q.clone(),
+                    };
+                    let kt = m.kt.value().unwrap_or(f64::NAN);
+                    m.no_load_current = total(&m.no_load_current, 1.0 / kt);
+                    if let Some(l) = &mut m.losses {
+                        l.friction_torque = total(&l.friction_torque, 1.0);
+                    }
+                }
+                (Some(m), None)
+            }
             Err(why) => (None, Some(why)),
         }
     };
@@ -513,6 +551,7 @@ fn coefficient(
                     speed_dependent: false,
                     bands: Vec::new(),
                     zero: zero.describe(unit),
+                    fitted_zero: None,
                     sensor_lag: None,
                 }
             }
@@ -647,6 +686,12 @@ fn dynamic_coefficient(kind: Kind, rec: &Recording, options: &Options) -> Option
         law: Some(law),
         speed_dependent,
         bands,
+        fitted_zero: Some(Quantity::judge_relative(
+            free.offset,
+            free.offset_stderr,
+            kind.unit(),
+            f64::INFINITY,
+        )),
         zero: format!(
             "zero {:+.4} ± {:.4} {} fitted with the law{}",
             free.offset,

@@ -8,6 +8,8 @@
 //! samples (a slow load cell logs a few per second, the speed every row), with a standard error
 //! that counts only independent samples: repeated values of a held sensor count once, and the
 //! lag-1 autocorrelation of what remains reduces the count further (n_eff = n(1 − r)/(1 + r)).
+//! Rest rows within [`REST_MARGIN`] of the motion are not used for the zero: the command has
+//! already changed before the speed leaves the rest band.
 //!
 //! ## The zero of a load cell
 //! A thrust or torque cell reads something at rest, and that something drifts while the motor
@@ -156,6 +158,9 @@ impl Plateau {
         }
     }
 }
+
+/// Time left out of a rest segment next to the motion [s].
+pub const REST_MARGIN: f64 = 0.5;
 
 /// A load cell's zero as the rest segments show it.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -312,8 +317,18 @@ fn zero_of(rec: &Recording, values: &[f64], moving: &[bool]) -> Zero {
     let (Some(first), Some(last)) = (first, last) else {
         return Zero::Unknown;
     };
-    let before = mean_of(values[..first].iter().copied());
-    let after = mean_of(values[last + 1..].iter().copied());
+    // The rows just before the speed rises past the rest limit already carry the motor's torque
+    // (and after the stop, the cells still ring): a margin of REST_MARGIN is left out on both
+    // sides of the motion.
+    let t = &rec.time;
+    let before_end = t[first] - REST_MARGIN;
+    let after_start = t[last] + REST_MARGIN;
+    let before = mean_of((0..first).filter(|&k| t[k] < before_end).map(|k| values[k]));
+    let after = mean_of(
+        (last + 1..values.len())
+            .filter(|&k| t[k] > after_start)
+            .map(|k| values[k]),
+    );
     match (before, after) {
         (Some(b), Some(a)) => {
             let drift = (a.value - b.value).abs() / 12f64.sqrt();
