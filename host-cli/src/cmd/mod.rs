@@ -12,4 +12,5 @@ pub mod report;
 pub mod sim;
 pub mod sim_drive;
 pub mod size;
+pub mod stand_instruments;
 pub mod telega;

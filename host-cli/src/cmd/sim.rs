@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use propid_io::tsv::TsvWriter;
+use propid_io::tsv::{StandColumn, TsvWriter};
 use propid_mechsim::{
     Braking, ConfigError, CurrentLoop, Disturbance, MechConfig, MechStand, ReportNoise, Run,
     TorqueReport, TsvSink, VelocityEstimator,
@@ -117,6 +117,9 @@ pub struct Args {
     /// The mechanism-level stand's own options (boxed: they are many).
     #[command(flatten)]
     pub mech: Box<MechArgs>,
+    /// A thrust stand's instruments: thrust cell, bus voltage and current, duty.
+    #[command(flatten)]
+    pub instruments: Box<super::stand_instruments::InstrumentArgs>,
 }
 
 /// The stand simulator `propid sim` runs.
@@ -551,7 +554,10 @@ fn run_mechanism(args: &Args, out: Box<dyn Write>) -> anyhow::Result<()> {
         duration: excitation.duration,
     };
     run.validate().map_err(input_error)?;
-    let mut sink = TsvSink::new(out, args.mech.write_setpoint)?;
+    let mut config = config;
+    args.instruments.mechanism(&mut config)?;
+    config.validate().map_err(input_error)?;
+    let mut sink = TsvSink::with_stand(out, args.mech.write_setpoint, args.instruments.any())?;
     let mut failure = None;
     let stand = MechStand::new(config, args.stand.seed).map_err(input_error)?;
     let rows = stand
@@ -611,8 +617,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .as_ref()
         .map_or("standard output".into(), |p| p.display().to_string());
     let writing = || format!("writing {out_name}");
-    let mut writer = TsvWriter::new(out, false).with_context(writing)?;
+    let drivetrain = args.instruments.formula()?;
+    let columns: &[StandColumn] = if drivetrain.is_some() {
+        &StandColumn::ALL
+    } else {
+        &[]
+    };
+    let mut writer = TsvWriter::with_columns(out, false, columns, &[]).with_context(writing)?;
     let mut stand = Stand::new(config, args.stand.seed);
+    if let Some(d) = drivetrain {
+        stand = stand.with_drivetrain(d, args.stand.seed);
+    }
     let rows = stand
         .run(&excitation, |row| writer.write(&row))
         .with_context(writing)?;
