@@ -11,17 +11,20 @@
 //!  propid-science    excitation, stand simulators, fit, diagnosis
 //!  propid-drive      the driver and the simulated Telega
 //!  propid-mechsim    a mechanism-level stand, independent of the science (`sim --stand mechanism`)
-//!  propid (here)     cmd::* — one module per subcommand: arguments → library call → output
+//!  propid (here)     cli — the command line, also run in-process (the Python package's `propid`);
+//!                    cmd::* — one module per subcommand: arguments → library call → output
 //! ```
 #![deny(missing_docs)]
 
 pub mod bus;
+pub mod cli;
 pub mod cmd;
 pub mod html;
 pub mod live;
 pub mod plot;
 pub mod signals;
 
+pub use cli::{exit_status, run};
 pub use propid_io::InputError;
 
 /// The data cannot support a verdict (`propid diagnose`): exit status 3, distinct from bad input.
