@@ -128,12 +128,43 @@ pub struct DynamicFit {
     pub rows: Vec<(usize, f64, f64)>,
 }
 
-/// Fits a cell's law through its lag. `acceleration` is given for a torque cell (J·dω/dt).
+/// dω/dt as the slope of a local straight line through the 2·`half` + 1 rows around each row
+/// (zero phase: no lag; it attenuates only what changes within the window), and the standard
+/// deviation of its noise for a speed noise σ_ω at the median row interval h:
+/// σ_ω·√(12/(m(m² − 1)))/h with m points. NaN where the window is incomplete.
+pub fn derivative(t: &[f64], speed: &[f64], half: usize) -> (Vec<f64>, f64) {
+    let n = t.len();
+    let mut out = vec![f64::NAN; n];
+    for k in half..n.saturating_sub(half) {
+        let (lo, hi) = (k - half, k + half);
+        let m = (hi - lo + 1) as f64;
+        let (mut st, mut sw) = (0.0, 0.0);
+        for j in lo..=hi {
+            st += t[j];
+            sw += speed[j];
+        }
+        let (mt, mw) = (st / m, sw / m);
+        let (mut sxy, mut sxx) = (0.0, 0.0);
+        for j in lo..=hi {
+            let dt = t[j] - mt;
+            sxy += dt * (speed[j] - mw);
+            sxx += dt * dt;
+        }
+        out[k] = if sxx > 0.0 { sxy / sxx } else { f64::NAN };
+    }
+    let m = (2 * half + 1) as f64;
+    let noise =
+        super::plateau::noise_of(speed) * (12.0 / (m * (m * m - 1.0))).sqrt() / median_interval(t);
+    (out, noise)
+}
+
+/// Fits a cell's law through its lag. `acceleration` (dω/dt and the standard deviation of its
+/// noise) is given for a torque cell (J·dω/dt).
 /// `None` when fewer than 50 updates remain.
 pub fn fit(
     t: &[f64],
     speed: &[f64],
-    acceleration: Option<&[f64]>,
+    acceleration: Option<(&[f64], f64)>,
     cell: &[f64],
     omega_ref: f64,
     fixed_exponent: Option<f64>,
@@ -149,7 +180,7 @@ pub fn fit(
         // The cell's state before the record is unknown: its first 5·τ_max are not fitted.
         .filter(|&k| t[k] > t0 + 5.0 * MAX_LAG)
         .filter(|&k| speed[k].is_finite() && speed[k].abs() > 0.05 * top)
-        .filter(|&k| acceleration.is_none_or(|a| a[k].is_finite()))
+        .filter(|&k| acceleration.is_none_or(|(a, _)| a[k].is_finite()))
         .collect();
     if rows.len() < 50 {
         return None;
@@ -166,7 +197,7 @@ pub fn fit(
             y[k]
         }
     };
-    let lagged_accel = |tau: f64| acceleration.map(|a| lag(t, a, tau));
+    let lagged_accel = |tau: f64| acceleration.map(|(a, _)| lag(t, a, tau));
     let log_speed: Vec<f64> = speed.iter().map(|w| (w.abs() / omega_ref).ln()).collect();
     let regressor = |p: f64| -> Vec<f64> { log_speed.iter().map(|l| (p * l).exp()).collect() };
     // Least squares at a given regressor and lag: (lagged regressor, θ = [A, J, offset], their
@@ -205,7 +236,7 @@ pub fn fit(
     // put back before lags are compared (as the diagnosis does for a force sensor's lag).
     let speed_noise = super::plateau::noise_of(speed);
     let interval = median_interval(t);
-    let accel_noise = acceleration.map_or(0.0, super::plateau::noise_of);
+    let accel_noise = acceleration.map_or(0.0, |(_, noise)| noise);
     let put_back = |p: f64, u: &[f64], theta: &[f64; 3], tau: f64| {
         let lost = 1.0 - smoothing_gain(interval, tau);
         // σ_u = |du/dω|·σ_ω = p·u·σ_ω/|ω|.

@@ -413,6 +413,8 @@ pub struct Coefficient {
     pub zero: String,
     /// The zero fitted with the law when it was not measured at rest [N or N·m].
     pub fitted_zero: Option<Quantity>,
+    /// The inertia a torque cell carries, J·dω/dt (dynamic method) [kg·m²].
+    pub inertia: Option<Quantity>,
     /// The load cell's lag (dynamic method) [s].
     pub sensor_lag: Option<Quantity>,
 }
@@ -572,6 +574,7 @@ pub fn coefficient_from_points(
         zero: zero_description,
         fitted_zero: fitted
             .map(|(z, se)| Quantity::judge_relative(z, se, kind.unit(), f64::INFINITY)),
+        inertia: None,
         sensor_lag: None,
     }
 }

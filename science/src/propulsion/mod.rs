@@ -424,6 +424,12 @@ pub fn identify(rec: &Recording, options: &Options) -> Result<Propulsion, String
             if let Some(q) = &mut corrected.torque {
                 q.iter_mut().for_each(|x| *x -= torque_zero);
             }
+            // A torque cell with a lag of its own reads the shaft torque late, while the current
+            // has only the ESC's filter: the torque is then rebuilt from the cell's fitted law
+            // and inertia, A·(ω/ω_r)^p + J·dω/dt, without the cell's lag.
+            if let Some(model) = torque.as_ref().and_then(|c| shaft_torque_model(c, rec)) {
+                corrected.torque = Some(model);
+            }
             motor::from_dynamic(&corrected)
         };
         match m {
@@ -552,6 +558,7 @@ fn coefficient(
                     bands: Vec::new(),
                     zero: zero.describe(unit),
                     fitted_zero: None,
+                    inertia: None,
                     sensor_lag: None,
                 }
             }
@@ -581,10 +588,27 @@ fn coefficient(
     c
 }
 
+/// The shaft torque rebuilt from a torque cell's dynamic fit, when the cell has a lag of its own.
+fn shaft_torque_model(c: &Coefficient, rec: &Recording) -> Option<Vec<f64>> {
+    if c.method != Method::Dynamic || c.sensor_lag.as_ref()?.identified().is_none() {
+        return None;
+    }
+    let law = c.law?;
+    let j = c.inertia.as_ref()?.value()?;
+    let (a, _) = dynamic::derivative(&rec.time, &rec.speed, 5);
+    Some(
+        rec.speed
+            .iter()
+            .zip(&a)
+            .map(|(w, a)| law.value(w.abs() / TAU) + j * a)
+            .collect(),
+    )
+}
+
 fn dynamic_coefficient(kind: Kind, rec: &Recording, options: &Options) -> Option<Coefficient> {
     let (cell, accel) = match kind {
         Kind::Thrust => (rec.thrust.as_deref()?, None),
-        Kind::Torque => (rec.torque.as_deref()?, Some(rec.acceleration.as_slice())),
+        Kind::Torque => (rec.torque.as_deref()?, Some(())),
     };
     // The reference: given, else the log-mean speed of the fitted rows.
     let top = rec
@@ -606,11 +630,10 @@ fn dynamic_coefficient(kind: Kind, rec: &Recording, options: &Options) -> Option
         .reference_speed
         .map(|n| n * TAU)
         .unwrap_or_else(|| (used.iter().map(|w| w.ln()).sum::<f64>() / used.len() as f64).exp());
-    let accel = match accel {
-        Some(a) if a.iter().any(|x| x.is_finite()) => Some(a),
-        Some(_) => None,
-        None => None,
-    };
+    // The torque cell carries J·dω/dt: dω/dt as the local slope of the speed over ±5 rows (its
+    // noise is far below a differentiated acceleration column's, and it has no lag of its own).
+    let derived = accel.map(|_| dynamic::derivative(&rec.time, &rec.speed, 5));
+    let accel = derived.as_ref().map(|(a, noise)| (a.as_slice(), *noise));
     let free = dynamic::fit(&rec.time, &rec.speed, accel, cell, omega_r, None)?;
     let quad = dynamic::fit(&rec.time, &rec.speed, accel, cell, omega_r, Some(2.0))?;
     let n_r = omega_r / TAU;
@@ -686,6 +709,7 @@ fn dynamic_coefficient(kind: Kind, rec: &Recording, options: &Options) -> Option
         law: Some(law),
         speed_dependent,
         bands,
+        inertia: free.inertia.map(|(j, s)| Quantity::judge(j, s, "kg·m²")),
         fitted_zero: Some(Quantity::judge_relative(
             free.offset,
             free.offset_stderr,

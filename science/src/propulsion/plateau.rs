@@ -252,19 +252,20 @@ pub struct Steady {
     pub top_speed: f64,
 }
 
-/// Standard deviation of white noise on `x` from the median absolute successive difference.
+/// Standard deviation of white noise on `x` from the median absolute second difference
+/// x[k+1] − 2x[k] + x[k−1] (which a signal changing smoothly between rows hardly moves, unlike a
+/// first difference on a fast run): for Gaussian noise its median is 0.6745·√6·σ.
 pub(crate) fn noise_of(x: &[f64]) -> f64 {
     let mut d: Vec<f64> = x
-        .windows(2)
-        .map(|w| (w[1] - w[0]).abs())
+        .windows(3)
+        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs())
         .filter(|v| v.is_finite())
         .collect();
     if d.is_empty() {
         return 0.0;
     }
     d.sort_by(f64::total_cmp);
-    // For Gaussian noise, |x₁ − x₂| has median 0.6745·√2·σ.
-    d[d.len() / 2] / (0.6745 * std::f64::consts::SQRT_2)
+    d[d.len() / 2] / (0.6745 * 6f64.sqrt())
 }
 
 /// Mean and standard error of the independent samples in `values` (a held value repeated in
