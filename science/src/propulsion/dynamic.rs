@@ -135,22 +135,21 @@ pub struct DynamicFit {
 pub fn derivative(t: &[f64], speed: &[f64], half: usize) -> (Vec<f64>, f64) {
     let n = t.len();
     let mut out = vec![f64::NAN; n];
-    for k in half..n.saturating_sub(half) {
-        let (lo, hi) = (k - half, k + half);
-        let m = (hi - lo + 1) as f64;
-        let (mut st, mut sw) = (0.0, 0.0);
-        for j in lo..=hi {
-            st += t[j];
-            sw += speed[j];
-        }
-        let (mt, mw) = (st / m, sw / m);
+    for (k, slot) in out
+        .iter_mut()
+        .enumerate()
+        .take(n.saturating_sub(half))
+        .skip(half)
+    {
+        let (ts, ws) = (&t[k - half..=k + half], &speed[k - half..=k + half]);
+        let m = ts.len() as f64;
+        let (mt, mw) = (ts.iter().sum::<f64>() / m, ws.iter().sum::<f64>() / m);
         let (mut sxy, mut sxx) = (0.0, 0.0);
-        for j in lo..=hi {
-            let dt = t[j] - mt;
-            sxy += dt * (speed[j] - mw);
-            sxx += dt * dt;
+        for (tj, wj) in ts.iter().zip(ws) {
+            sxy += (tj - mt) * (wj - mw);
+            sxx += (tj - mt) * (tj - mt);
         }
-        out[k] = if sxx > 0.0 { sxy / sxx } else { f64::NAN };
+        *slot = if sxx > 0.0 { sxy / sxx } else { f64::NAN };
     }
     let m = (2 * half + 1) as f64;
     let noise =
