@@ -132,6 +132,15 @@ fn decimals(stderr: f64) -> i32 {
 #[test]
 fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
     let mut got = Vec::new();
+    let mut exponents = Vec::new();
+    let air = Air::isa();
+    printed(
+        "Re_D at 12000 rpm [1e5]",
+        air.reynolds_rotational(200.0, D) / 1e5,
+        4.33,
+        2,
+    );
+    printed("tip Mach at 12000 rpm", air.tip_mach(200.0, D), 0.33, 2);
     for (name, _, ct, cq, ratio) in TABLE {
         let p = rcbench(name);
         assert!(
@@ -154,6 +163,10 @@ fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
             );
         }
         got.push([t, c, r]);
+        exponents.push((
+            q(&p.thrust.as_ref().unwrap().exponent).0,
+            q(&p.torque.as_ref().unwrap().exponent).0,
+        ));
     }
     // Agreement. The four F60 runs of one day (one motor and propeller, four ESCs) differ by more
     // than their standard errors: their standard deviation is the run-to-run reproducibility,
@@ -272,6 +285,8 @@ fn the_t7056_against_published_static_coefficients() {
     printed("T7056 C_P there", cp, 0.0666, 4);
     printed("T7056 FM there", fm, 0.594, 3);
     printed("DA4052 FM", figure_of_merit(ct_da, cp_da / TAU), 0.544, 3);
+    printed("C_T, T7056/DA4052 at equal Re_D", ct / ct_da, 0.93, 2);
+    printed("C_P, T7056/DA4052 at equal Re_D", cp / cp_da, 0.82, 2);
     // Electrical rpm with 7 pole pairs would give C_T 49 times smaller: no propeller has that.
     assert!(
         propid_science::propulsion::plausibility(Kind::Thrust, ct / 49.0, D)
@@ -319,6 +334,12 @@ fn esc32_kv_from_back_emf_against_the_importers_kv() {
             (k - kv_given) / ks,
             sigmas,
             1,
+        );
+        printed(
+            &format!("{file} Kv/--kv"),
+            k / kv_given,
+            if kv_given == 1600.0 { 1.30 } else { 1.19 },
+            2,
         );
         // The importer's torque (K_t·I/duty from --kv) is recognised as computed from the current.
         assert!(m.kt.identified().is_none() && m.losses.is_none());
