@@ -161,38 +161,39 @@ fn simulated_stand_to_constants_to_a_sizing_round_trip() {
     }
 }
 
+/// docs/PROPULSION.md §5's question.
+const WORKED_EXAMPLE: &[&str] = &[
+    "size",
+    "--c-t",
+    "0.14",
+    "--c-q",
+    "0.0107",
+    "--diameter",
+    "7in",
+    "--thrust",
+    "6N",
+    "--rotors",
+    "4",
+    "--kv",
+    "1750",
+    "--resistance",
+    "60mohm",
+    "--no-load-current",
+    "0.8A",
+    "--voltage",
+    "4S",
+    "--battery",
+    "3000mAh",
+    "--usable",
+    "0.8",
+    "--density",
+    "1.225",
+];
+
 #[test]
 fn the_worked_example_of_the_docs() {
     // docs/PROPULSION.md §5, computed there by hand.
-    let out = propid_ok(&[
-        "size",
-        "--c-t",
-        "0.14",
-        "--c-q",
-        "0.0107",
-        "--diameter",
-        "7in",
-        "--thrust",
-        "6N",
-        "--rotors",
-        "4",
-        "--kv",
-        "1750",
-        "--resistance",
-        "60mohm",
-        "--no-load-current",
-        "0.8A",
-        "--voltage",
-        "4S",
-        "--battery",
-        "3000mAh",
-        "--usable",
-        "0.8",
-        "--density",
-        "1.225",
-        "--format",
-        "json",
-    ]);
+    let out = propid_ok(&[WORKED_EXAMPLE, &["--format", "json"]].concat());
     let a = json(&out);
     let p = &a["points"][0];
     let e = &p["electrical"];
@@ -258,31 +259,7 @@ fn the_worked_example_of_the_docs() {
         );
     }
     // The text says the same.
-    let out = propid_ok(&[
-        "size",
-        "--c-t",
-        "0.14",
-        "--c-q",
-        "0.0107",
-        "--diameter",
-        "7in",
-        "--thrust",
-        "6N",
-        "--rotors",
-        "4",
-        "--kv",
-        "1750",
-        "--resistance",
-        "60mohm",
-        "--no-load-current",
-        "0.8A",
-        "--voltage",
-        "4S",
-        "--battery",
-        "3000mAh",
-        "--density",
-        "1.225",
-    ]);
+    let out = propid_ok(WORKED_EXAMPLE);
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
         text.contains("speed   11226") && text.contains("Kv ≥ 782 rpm/V"),

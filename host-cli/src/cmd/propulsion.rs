@@ -42,6 +42,32 @@ pub fn quantity(dimension: Dimension) -> impl Fn(&str) -> Result<Parsed, String>
     move |s| parse(s, dimension)
 }
 
+/// The air: a density, or a temperature and a pressure (`propid propulsion` and `propid size`).
+#[derive(clap::Args, Debug)]
+pub struct AirArgs {
+    /// Air density [kg/m³].
+    #[arg(long, value_parser = quantity(Dimension::Density), conflicts_with_all = ["temperature", "pressure"])]
+    pub density: Option<Parsed>,
+    /// Air temperature (20C, 293K), with --pressure: the density of dry air.
+    #[arg(long, value_parser = quantity(Dimension::Temperature), requires = "pressure")]
+    pub temperature: Option<Parsed>,
+    /// Air pressure (1013hPa, 101325Pa), with --temperature.
+    #[arg(long, value_parser = quantity(Dimension::Pressure), requires = "temperature")]
+    pub pressure: Option<Parsed>,
+}
+
+impl AirArgs {
+    /// The air the flags describe, `default` when none is given.
+    pub fn air(&self, default: Air) -> Result<Air, InputError> {
+        match (&self.density, &self.temperature, &self.pressure) {
+            (Some(d), _, _) => Air::with_density(d.si, None),
+            (None, Some(t), Some(p)) => Air::from_temperature_pressure(t.si, p.si),
+            _ => Ok(default),
+        }
+        .map_err(|e| InputError(format!("--density/--temperature/--pressure: {e}")))
+    }
+}
+
 /// Arguments of `propid propulsion`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -58,15 +84,9 @@ pub struct Args {
     /// Propeller diameter (7in, 0.1778m, 178mm).
     #[arg(long, value_parser = quantity(Dimension::Length))]
     pub diameter: Parsed,
-    /// Air density [kg/m³] (default: ISA sea level, 1.225, unless --temperature and --pressure).
-    #[arg(long, value_parser = quantity(Dimension::Density), conflicts_with_all = ["temperature", "pressure"])]
-    pub density: Option<Parsed>,
-    /// Air temperature (20C, 293K), with --pressure: the density of dry air.
-    #[arg(long, value_parser = quantity(Dimension::Temperature), requires = "pressure")]
-    pub temperature: Option<Parsed>,
-    /// Air pressure (1013hPa, 101325Pa), with --temperature.
-    #[arg(long, value_parser = quantity(Dimension::Pressure), requires = "temperature")]
-    pub pressure: Option<Parsed>,
+    /// The air (default: ISA sea level, 1.225 kg/m³).
+    #[command(flatten)]
+    pub air: AirArgs,
     /// Blade chord at 75 % radius (15mm): also gives the blade Reynolds number.
     #[arg(long, value_parser = quantity(Dimension::Length))]
     pub chord: Option<Parsed>,
@@ -120,12 +140,7 @@ pub fn unit_notes(
 impl Args {
     /// The identification's options, checked; errors name the flag.
     pub fn options(&self) -> Result<Options, InputError> {
-        let air = match (&self.density, &self.temperature, &self.pressure) {
-            (Some(d), _, _) => Air::with_density(d.si, None),
-            (None, Some(t), Some(p)) => Air::from_temperature_pressure(t.si, p.si),
-            _ => Ok(Air::isa()),
-        }
-        .map_err(|e| InputError(format!("--density/--temperature/--pressure: {e}")))?;
+        let air = self.air.air(Air::isa())?;
         if self.pole_pairs == Some(0) {
             return Err(InputError("--pole-pairs must be at least 1".into()));
         }

@@ -16,7 +16,7 @@ use propid_science::propulsion::text::size_text;
 use propid_science::propulsion::units::{Dimension, Parsed, G0};
 use propid_science::propulsion::{Air, Kind, PowerLaw, Propulsion};
 
-use super::propulsion::{quantity, unit_notes};
+use super::propulsion::{quantity, unit_notes, AirArgs};
 use crate::InputError;
 
 /// Output format.
@@ -64,15 +64,9 @@ pub struct Args {
     /// Rotors on the vehicle.
     #[arg(long, default_value_t = 1)]
     pub rotors: u32,
-    /// Air density for the sizing [kg/m³] (default: the identification's).
-    #[arg(long, value_parser = quantity(Dimension::Density), conflicts_with_all = ["temperature", "pressure"])]
-    pub density: Option<Parsed>,
-    /// Air temperature (with --pressure).
-    #[arg(long, value_parser = quantity(Dimension::Temperature), requires = "pressure")]
-    pub temperature: Option<Parsed>,
-    /// Air pressure (with --temperature).
-    #[arg(long, value_parser = quantity(Dimension::Pressure), requires = "temperature")]
-    pub pressure: Option<Parsed>,
+    /// The air for the sizing (default: the identification's density).
+    #[command(flatten)]
+    pub air: AirArgs,
     /// Motor Kv [rpm/V] (default: the result file's, where it identified the motor).
     #[arg(long, value_parser = quantity(Dimension::Kv))]
     pub kv: Option<Parsed>,
@@ -178,14 +172,9 @@ impl Args {
                 ))
             }
         };
-        let density = match (&self.density, &self.temperature, &self.pressure) {
-            (Some(d), _, _) => Air::with_density(d.si, None).map(|a| a.density),
-            (None, Some(t), Some(p)) => {
-                Air::from_temperature_pressure(t.si, p.si).map(|a| a.density)
-            }
-            _ => Ok(propeller.density),
-        }
-        .map_err(|e| InputError(format!("--density/--temperature/--pressure: {e}")))?;
+        let identified = Air::with_density(propeller.density, None)
+            .map_err(|e| InputError(format!("--propeller: {e}")))?;
+        let density = self.air.air(identified)?.density;
         if self.rotors == 0 {
             return Err(InputError("--rotors must be at least 1".into()));
         }
