@@ -26,7 +26,7 @@ use std::sync::OnceLock;
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, Values, ALL_SLOTS};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvReader, Values, ALL_SLOTS};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -68,25 +68,25 @@ impl FitOptions {
     pub fn check(&self) -> Result<(), InputError> {
         let b = self;
         if !(b.mass_min > 0.0 && b.mass_min.is_finite() && b.mass_min <= b.mass_max) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "mass bounds must satisfy 0 < mass_min ≤ mass_max (got {} and {})",
                 b.mass_min, b.mass_max
             )));
         }
         for (name, v) in [("c1_max", b.c1_max), ("c2_max", b.c2_max)] {
             if v.is_nan() || v < 0.0 {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
         }
         if let Some(d) = b.diameter {
             if !(d > 0.0 && d.is_finite()) {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "the propeller diameter must be a positive length in metres (got {d})"
                 )));
             }
         }
         if !(b.density > 0.0 && b.density.is_finite()) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "the air density must be positive (got {} kg/m³)",
                 b.density
             )));
@@ -98,12 +98,10 @@ impl FitOptions {
 /// Why a fit failed.
 #[derive(Debug, thiserror::Error)]
 pub enum FitError {
-    /// The data or the options cannot give a fit (the message names file, line or option).
+    /// The data or the options cannot give a fit, or the TSV is malformed or could not be read
+    /// (the error names file, line, column or option).
     #[error(transparent)]
     Input(#[from] InputError),
-    /// The TSV is malformed or could not be read.
-    #[error(transparent)]
-    Tsv(#[from] TsvError),
 }
 
 /// The result of a fit, as printed.
@@ -209,14 +207,14 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
         }
     }
     if rows == 0 {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{}: no data rows after the header",
             reader.source_name()
         ))
         .into());
     }
     let (Some(start), Some(end)) = (run_start, run_end) else {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{}: no row has finite t, force, velocity and acceleration",
             reader.source_name()
         ))
@@ -256,7 +254,7 @@ pub fn fit_path_with(
 ) -> Result<(FitReport, Vec<Sample>), FitError> {
     options.check()?;
     let name = path.display().to_string();
-    let file = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+    let file = File::open(path).map_err(|e| InputError::os(name.clone(), "cannot open", &e))?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let map = if size == 0 {
         None
@@ -265,7 +263,7 @@ pub fn fit_path_with(
         // the file while it is mapped would make a read fault (SIGBUS); that is the caveat
         // every memory-mapping reader accepts, and the file is read once, start to end.
         let map = unsafe { memmap2::Mmap::map(&file) }
-            .map_err(|e| InputError(format!("{name}: cannot map: {e}")))?;
+            .map_err(|e| InputError::os(name.clone(), "cannot map", &e))?;
         // Read-ahead hint (Unix only; elsewhere the OS's default is fine).
         #[cfg(unix)]
         let _ = map.advise(memmap2::Advice::Sequential);
@@ -303,6 +301,8 @@ fn fit_bytes(
     let reader = TsvReader::new(data, name)?;
     let layout = reader.layout().clone();
     let header_len = reader.bytes_read() as usize;
+    // A last row without a line end was cut while the file was written: not fitted, announced.
+    let (data, cut) = propid_io::tsv::without_cut_line(data, header_len);
     let size = data.len() as u64;
     let pieces = scan::split(data, header_len, chunks);
     let done = AtomicU64::new(header_len as u64);
@@ -348,10 +348,10 @@ fn fit_bytes(
         chunks.push(c);
     }
     if rows == 0 {
-        return Err(InputError(format!("{name}: no data rows after the header")).into());
+        return Err(InputError::invalid(format!("{name}: no data rows after the header")).into());
     }
     let Some(last_chunk) = chunks.iter().rposition(|c| c.run_rows > 0) else {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{name}: no row has finite t, force, velocity and acceleration"
         ))
         .into());
@@ -445,7 +445,12 @@ fn fit_bytes(
             return Err(overflow_error(name, line, &s).into());
         }
     }
-    let report = report_of(&estimator, options, window, name)?;
+    let mut report = report_of(&estimator, options, window, name)?;
+    if cut {
+        report
+            .warnings
+            .push(propid_io::tsv::cut_line_note(name, lines + 1));
+    }
     let mut kept = Vec::new();
     if want_samples {
         let keep_every = (n / 4000).max(1);
@@ -499,7 +504,7 @@ fn sums_finite(estimator: &LoadEstimator<f64>) -> bool {
 
 /// The error for the row at which the sums stop being finite.
 fn overflow_error(name: &str, line: u64, s: &Sample) -> InputError {
-    InputError(format!(
+    InputError::invalid(format!(
         "{name}: line {line}: the sums of squares overflow a 64-bit float at this row \
          (force {:e}, velocity {:e}, acceleration {:e}): a value this large is not a measurement; \
          remove the row or rescale the data",
@@ -519,12 +524,13 @@ fn report_of(
 ) -> Result<FitReport, InputError> {
     let n = estimator.count() as u64;
     if n < 10 {
-        return Err(InputError(format!(
-            "{name}: only {n} usable samples after trimming (rows {}..={} of {}); at least 10 are needed",
+        return Err(InputError::cannot_judge(format!(
+            "only {n} usable samples after trimming (rows {}..={} of {}); at least 10 are needed",
             window.first + 1,
             window.last + 1,
             window.rows
-        )));
+        ))
+        .in_file(name));
     }
     // An infinite c1_max or c2_max means "unbounded": the bound rows are `c·θ₀ ≤ θ` and an
     // infinite coefficient makes them NaN, so a finite stand-in far beyond any physical drag is
@@ -538,26 +544,29 @@ fn report_of(
     };
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
-        SolveError::NoExcitation { regressor } => InputError(format!(
-            "{name}: `{}` is zero in every sample: the data cannot identify {}",
+        SolveError::NoExcitation { regressor } => InputError::cannot_judge(format!(
+            "`{}` is zero in every sample: the data cannot identify {}",
             names[regressor],
             ["the mass", "c1", "c2"][regressor]
-        )),
-        SolveError::TooFewSamples => InputError(format!("{name}: too few samples")),
-        SolveError::Singular => InputError(format!(
-            "{name}: the regressors are linearly dependent: the excitation does not identify mass, c1 and c2"
-        )),
-        SolveError::Infeasible => InputError(format!("{name}: the bounds admit no solution")),
+        ))
+        .in_file(name),
+        SolveError::TooFewSamples => InputError::cannot_judge("too few samples".into()).in_file(name),
+        SolveError::Singular => InputError::cannot_judge(
+            "the regressors are linearly dependent: the excitation does not identify mass, c1 and c2".into(),
+        )
+        .in_file(name),
+        SolveError::Infeasible => InputError::invalid(format!("{name}: the bounds admit no solution")),
     })?;
     if est.condition_number.is_nan() || est.condition_number >= UNIDENTIFIABLE_CONDITION {
-        return Err(InputError(format!(
-            "{name}: cannot judge: the data cannot identify the mass, c1 and c2 (condition number \
+        return Err(InputError::cannot_judge(format!(
+            "the data cannot identify the mass, c1 and c2 (condition number \
              {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}..={} \
              (e.g. a constant velocity); record with a torque that varies the speed",
             est.condition_number,
             window.first + 1,
             window.last + 1
-        )));
+        ))
+        .in_file(name));
     }
     let mut warnings = Vec::new();
     if let Some((line, column)) = window.breaker {

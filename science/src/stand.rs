@@ -104,7 +104,9 @@ impl StandConfig {
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be positive (got {v})")));
+                return Err(InputError::invalid(format!(
+                    "{name} must be positive (got {v})"
+                )));
             }
         }
         let non_negative = [
@@ -121,7 +123,7 @@ impl StandConfig {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
         }
         Ok(())

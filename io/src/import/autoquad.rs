@@ -3,8 +3,10 @@
 use std::path::Path;
 
 use super::{
-    column, csv_reader, differentiate, find_column, mean_sd, number, open_csv, Imported, UpdateRate,
+    column, csv_error, csv_reader, differentiate, find_column, mean_sd, number, open_csv, Imported,
+    UpdateRate,
 };
+use crate::input::LineLimit;
 use crate::tsv::{Row, Sample, Stand, StandColumn};
 use crate::InputError;
 
@@ -53,7 +55,7 @@ pub fn read_autoquad(
 
 fn check_kv(kv: f64) -> Result<(), InputError> {
     if !kv.is_finite() || kv <= 0.0 {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "kv must be a finite positive number of rpm/V (got {kv})"
         )));
     }
@@ -61,7 +63,7 @@ fn check_kv(kv: f64) -> Result<(), InputError> {
 }
 
 fn autoquad(
-    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    mut reader: csv::Reader<LineLimit<Box<dyn std::io::Read + '_>>>,
     headers: csv::StringRecord,
     file: String,
     kv: f64,
@@ -76,12 +78,16 @@ fn autoquad(
     let mut raw: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
-        let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
+        let record = record.map_err(|e| csv_error(&file, &e, line))?;
         let text = record.get(stamp).unwrap_or("");
         let pc = pc_time(text).ok_or_else(|| {
-            InputError(format!(
-                "{file}: line {line}, column `Timestamp`: `{text}` is not YYYY-MM-DD HH:MM:SS:mmm"
+            InputError::invalid(format!(
+                "`{}` is not YYYY-MM-DD HH:MM:SS:mmm",
+                text.chars().take(40).collect::<String>()
             ))
+            .in_file(&file)
+            .at_line(line)
+            .in_column("Timestamp")
         })?;
         raw.push((
             pc,
@@ -96,9 +102,9 @@ fn autoquad(
     }
     let n = raw.len();
     if n < 2 {
-        return Err(InputError(format!(
-            "{file}: {n} data rows; at least 2 are needed"
-        )));
+        return Err(
+            InputError::invalid(format!("{n} data rows; at least 2 are needed")).in_file(&file),
+        );
     }
     // The time base: the ESC logs at a fixed rate while the PC stamps rows in bursts, so the
     // row interval is the least-squares slope of PC time against row index.
@@ -113,9 +119,11 @@ fn autoquad(
     }
     let dt = sxy / sxx;
     if !(1e-5..=1.0).contains(&dt) {
-        return Err(InputError(format!(
-            "{file}: column `Timestamp`: the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
-        )));
+        return Err(InputError::invalid(format!(
+            "the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
+        ))
+        .in_file(&file)
+        .in_column("Timestamp"));
     }
     let scatter = raw
         .iter()

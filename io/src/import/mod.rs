@@ -28,8 +28,10 @@ mod rcbench;
 
 use std::path::Path;
 
+use crate::error::Importer;
+use crate::input::LineLimit;
 use crate::tsv::{Row, StandColumn, TsvWriter};
-use crate::InputError;
+use crate::{ErrorKind, InputError};
 
 pub use autoquad::{import_autoquad, read_autoquad};
 pub use rcbench::{import_rcbench, read_rcbench, RcbenchOptions};
@@ -160,30 +162,63 @@ pub(crate) fn mean_sd(x: &[f64]) -> (f64, f64) {
 
 /// A CSV reader over some input, its header line, and the input's name for messages.
 pub(crate) type Csv<'a> = (
-    csv::Reader<Box<dyn std::io::Read + 'a>>,
+    csv::Reader<LineLimit<Box<dyn std::io::Read + 'a>>>,
     csv::StringRecord,
     String,
 );
 
-/// Opens a CSV log: the reader, its header and the file name for messages.
+/// Opens a CSV log ([`crate::input::open`]: gzip read through, lines bounded, OS errors with the
+/// path): the reader, its header and the file name for messages.
 pub(crate) fn open_csv(path: &Path) -> Result<Csv<'static>, InputError> {
-    let file = path.display().to_string();
-    let f =
-        std::fs::File::open(path).map_err(|e| InputError(format!("{file}: cannot open: {e}")))?;
-    csv_reader(Box::new(f), file)
+    let input = crate::input::open(path)?;
+    let name = input.name().to_owned();
+    csv_reader(Box::new(input), name)
 }
 
-/// A CSV reader over any input (named `name` in messages), with its header.
+/// A CSV reader over any input (named `name` in messages), with its header; lines bounded.
 pub(crate) fn csv_reader(
     input: Box<dyn std::io::Read + '_>,
     name: String,
 ) -> Result<Csv<'_>, InputError> {
-    let mut reader = csv::ReaderBuilder::new().flexible(true).from_reader(input);
+    let mut reader = csv::ReaderBuilder::new()
+        .flexible(true)
+        .from_reader(LineLimit::new(input));
     let headers = reader
         .headers()
-        .map_err(|e| InputError(format!("{name}: line 1: {e}")))?
+        .map_err(|e| csv_error(&name, &e, 1))?
         .clone();
     Ok((reader, headers, name))
+}
+
+/// A CSV reader's error at `line` of `name`, typed.
+pub(crate) fn csv_error(name: &str, e: &csv::Error, line: u64) -> InputError {
+    match e.kind() {
+        csv::ErrorKind::Io(io) => crate::input::error_of(name, io, line),
+        csv::ErrorKind::Utf8 { .. } => InputError::new(ErrorKind::NotText)
+            .in_file(name)
+            .at_line(line),
+        _ => InputError::invalid(e.to_string())
+            .in_file(name)
+            .at_line(line),
+    }
+}
+
+/// The importer for a file whose first line is `header`, when it is a stand's own export (what a
+/// TSV reader tells a user who gave it one).
+pub fn recognise(header: &str) -> Option<Importer> {
+    let names: Vec<String> = header.split(',').map(loose).collect();
+    if names.len() < 3 {
+        return None;
+    }
+    let has = |n: &str| names.iter().any(|h| *h == loose(n));
+    let starts = |n: &str| names.iter().any(|h| h.starts_with(&loose(n)));
+    if has("Timestamp") && has("Amps") && has("RPM") && has("Duty") {
+        Some(Importer::Autoquad)
+    } else if (starts("Time (") || has("Time")) && (starts("Torque (") || starts("Thrust (")) {
+        Some(Importer::Rcbench)
+    } else {
+        None
+    }
 }
 
 /// A header name compared loosely: no byte-order mark, lower case, `µ`/`μ` as `u`, and no
@@ -218,15 +253,16 @@ pub(crate) fn column(
     file: &str,
 ) -> Result<(usize, String), InputError> {
     find_column(headers, names).ok_or_else(|| {
-        InputError(format!(
-            "{file}: line 1: no column `{}` (columns: {})",
-            names.join("` or `"),
-            headers
+        InputError::new(ErrorKind::MissingColumn {
+            wanted: names.join("` or `"),
+            columns: headers
                 .iter()
                 .map(|h| h.trim_start_matches('\u{feff}'))
                 .collect::<Vec<_>>()
-                .join(", ")
-        ))
+                .join(", "),
+        })
+        .in_file(file)
+        .at_line(1)
     })
 }
 
@@ -239,21 +275,26 @@ pub(crate) fn number(
     file: &str,
     line: u64,
 ) -> Result<f64, InputError> {
+    let at = |kind| {
+        InputError::new(kind)
+            .in_file(file)
+            .at_line(line)
+            .in_column(name)
+    };
     let Some(text) = record.get(index) else {
-        return Err(InputError(format!(
-            "{file}: line {line}, column `{name}`: missing (the row has {} fields, the column is field {})",
-            record.len(),
-            index + 1
-        )));
+        return Err(at(ErrorKind::ShortRow {
+            found: record.len(),
+            needed: index + 1,
+        }));
     };
     let text = text.trim();
     if text.is_empty() {
         return Ok(f64::NAN);
     }
     text.parse().map_err(|_| {
-        InputError(format!(
-            "{file}: line {line}, column `{name}`: `{text}` is not a number"
-        ))
+        at(ErrorKind::NotANumber {
+            text: text.chars().take(40).collect(),
+        })
     })
 }
 

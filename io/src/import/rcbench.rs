@@ -3,9 +3,10 @@
 use std::path::Path;
 
 use super::{
-    column, csv_reader, differentiate, find_column, loose, mean_sd, number, open_csv, ExtraColumn,
-    Imported, UpdateRate,
+    column, csv_error, csv_reader, differentiate, find_column, loose, mean_sd, number, open_csv,
+    ExtraColumn, Imported, UpdateRate,
 };
+use crate::input::LineLimit;
 use crate::tsv::{Row, Sample, StandColumn};
 use crate::InputError;
 
@@ -81,10 +82,13 @@ fn thrust_column(
         .map(|u| u.trim_start_matches('(').trim_end_matches(')').to_owned())
         .unwrap_or_default();
     let Some(&(_, scale)) = THRUST_UNITS.iter().find(|(u, _)| *u == unit) else {
-        return Err(InputError(format!(
-            "{file}: line 1, column `{name}`: the thrust's unit {} is not one propid converts (gf, kgf, N, lbf, ozf); rename the column to say its unit, e.g. `Thrust (gf)`",
+        return Err(InputError::invalid(format!(
+            "the thrust's unit {} is not one propid converts (gf, kgf, N, lbf, ozf); rename the column to say its unit, e.g. `Thrust (gf)`",
             if unit.is_empty() { "is not given".to_string() } else { format!("`{unit}`") }
-        )));
+        ))
+        .in_file(file)
+        .at_line(1)
+        .in_column(name));
     };
     Ok(Some(KeptColumn {
         to: Kept::Stand(StandColumn::Thrust),
@@ -250,7 +254,7 @@ pub fn read_rcbench(
 }
 
 fn rcbench(
-    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    mut reader: csv::Reader<LineLimit<Box<dyn std::io::Read + '_>>>,
     headers: csv::StringRecord,
     file: String,
     options: &RcbenchOptions,
@@ -287,7 +291,7 @@ fn rcbench(
     let mut dropped_lines = Vec::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
-        let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
+        let record = record.map_err(|e| csv_error(&file, &e, line))?;
         let t = number(&record, time, &time_name, &file, line)? * time_scale;
         let q = number(&record, torque, &torque_name, &file, line)?;
         let speeds = speeds
@@ -299,9 +303,10 @@ fn rcbench(
             .map(|c| Ok((number(&record, c.index, &c.name, &file, line)? - c.offset) * c.scale))
             .collect::<Result<Vec<f64>, InputError>>()?;
         if !t.is_finite() {
-            return Err(InputError(format!(
-                "{file}: line {line}, column `{time_name}`: no time"
-            )));
+            return Err(InputError::invalid("no time".into())
+                .in_file(&file)
+                .at_line(line)
+                .in_column(&time_name));
         }
         // Time must increase strictly, as the TSV promises: a row repeating an earlier time
         // is dropped and counted.
@@ -312,10 +317,11 @@ fn rcbench(
         raw.push(Raw { t, q, speeds, kept });
     }
     if raw.len() < 2 {
-        return Err(InputError(format!(
-            "{file}: {} data rows with increasing time; at least 2 are needed",
+        return Err(InputError::invalid(format!(
+            "{} data rows with increasing time; at least 2 are needed",
             raw.len()
-        )));
+        ))
+        .in_file(&file));
     }
     let n = raw.len();
     let mut assumptions = Vec::new();
@@ -324,10 +330,12 @@ fn rcbench(
     let mut dts: Vec<f64> = raw.windows(2).map(|w| w[1].t - w[0].t).collect();
     let dt = super::median(&mut dts).unwrap_or(f64::NAN);
     if !(1e-5..=1.0).contains(&dt) {
-        return Err(InputError(format!(
-            "{file}: column `{time_name}`: the median interval between rows is {dt} {}; a stand logs every 10 µs to 1 s — is the unit right?",
+        return Err(InputError::invalid(format!(
+            "the median interval between rows is {dt} {}; a stand logs every 10 µs to 1 s — is the unit right?",
             if time_scale == 1.0 { "s" } else { "s (after ms → s)" }
-        )));
+        ))
+        .in_file(&file)
+        .in_column(&time_name));
     }
     assumptions.push(format!(
         "time = `{time_name}`{}: {n} rows over {:.1} s, median row interval {:.2} ms ({:.1} rows/s)",
@@ -356,14 +364,15 @@ fn rcbench(
             .any(|r| r.speeds[s].is_finite() && r.speeds[s] != 0.0)
     });
     let Some(chosen) = chosen else {
-        return Err(InputError(format!(
-            "{file}: no speed column has a non-zero value ({})",
+        return Err(InputError::invalid(format!(
+            "no speed column has a non-zero value ({})",
             speeds
                 .iter()
                 .map(|s| format!("`{}`", s.1))
                 .collect::<Vec<_>>()
                 .join(", ")
-        )));
+        ))
+        .in_file(&file));
     };
     let speed_name = &speeds[chosen].1;
     let others: Vec<String> = speeds
@@ -423,9 +432,9 @@ fn rcbench(
     // The torque: how often it updates, its zero at rest, its sign at speed.
     let rate = UpdateRate::measure(rows.iter().map(|r| (r.sample.t, r.sample.force)));
     if rate.present == 0 {
-        return Err(InputError(format!(
-            "{file}: column `{torque_name}` is empty in every row"
-        )));
+        return Err(InputError::invalid("empty in every row".into())
+            .in_file(&file)
+            .in_column(&torque_name));
     }
     let cell = LoadCell::measure(&rows, |r| r.sample.force);
     let sign = cell.sign();
