@@ -327,3 +327,44 @@ fn exit_statuses_are_the_same_across_commands() {
         assert!(err.contains("zero.tsv: cannot judge"), "{args:?}: {err}");
     }
 }
+
+/// Every row written twice (issue 26: standard errors √2 too small, no warning): `fit` warns
+/// with the first copy's line, `diagnose` says it in its notes.
+#[test]
+fn every_row_doubled_is_announced() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = sim(dir.path(), "run.tsv", "20");
+    let text = std::fs::read_to_string(&run).unwrap();
+    let mut lines = text.lines();
+    let mut doubled = format!("{}\n", lines.next().unwrap());
+    for l in lines {
+        doubled += &format!("{l}\n{l}\n");
+    }
+    let twice = dir.path().join("twice.tsv");
+    std::fs::write(&twice, doubled).unwrap();
+    let out = propid(&["fit", twice.to_str().unwrap()], None);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: ")
+            && err.contains(
+                "twice.tsv: 4000 rows are copies of the row before them (the first at line 3)"
+            )
+            && err.contains("√2"),
+        "{err}"
+    );
+    let clean = propid(&["fit", run.to_str().unwrap()], None);
+    assert!(!String::from_utf8_lossy(&clean.stderr).contains("copies"));
+    let out = propid(
+        &["diagnose", "--format", "json", twice.to_str().unwrap()],
+        None,
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(
+        json["notes"]
+            .to_string()
+            .contains("4000 rows repeat the previous row's time (the first at line 3)"),
+        "{}",
+        json["notes"]
+    );
+}

@@ -749,12 +749,20 @@ impl Table {
         }
         if let (n @ 1.., Some(first)) = self.repeated_times {
             notes.push(format!(
-                "{}: {n} rows repeat the previous row's time (the first at line {first}): duplicated rows count twice and make every standard error too small; remove them if they are copies",
+                "{}: {n} rows repeat the previous row's time (the first at line {first}): duplicated rows count twice and make every standard error too small (by √2 when every row is doubled); remove them if they are copies",
                 self.name
             ));
         }
         notes
     }
+}
+
+/// What to tell a user about `n` rows that are copies of the row before them (the first at
+/// `first`).
+pub fn copies_note(name: &str, n: u64, first: u64) -> String {
+    format!(
+        "{name}: {n} rows are copies of the row before them (the first at line {first}): each copy counts as another measurement, which makes every standard error too small (by √2 when every row is doubled); remove them if the log was written twice"
+    )
 }
 
 /// What to tell a user about a last line cut without a line end ([`TsvReader::truncated_line`]).

@@ -338,8 +338,13 @@ fn fit_bytes(
     let mut chunks = Vec::with_capacity(results.len());
     let (mut line_base, mut row_base) = (vec![], vec![]);
     let (mut lines, mut rows, mut complete) = (1u64, 0u64, 0u64);
+    let mut copies = (0u64, None);
     for r in results {
         let c = r.map_err(|(line, e)| e.at(name, lines + line))?;
+        copies.0 += c.copies.0;
+        if copies.1.is_none() {
+            copies.1 = c.copies.1.map(|l| lines + l);
+        }
         line_base.push(lines);
         row_base.push(rows);
         lines += c.lines;
@@ -383,6 +388,40 @@ fn fit_bytes(
     let run_rows: u64 = parts.iter().map(|k| chunks[*k].run_rows).sum();
     let last = run_start + run_rows - 1;
     let first = run_start + (0.1 * (last - run_start) as f64) as u64;
+    let notes = |mut report: FitReport| {
+        if cut {
+            report
+                .warnings
+                .push(propid_io::tsv::cut_line_note(name, lines + 1));
+        }
+        if let (n @ 1.., Some(first)) = copies {
+            report
+                .warnings
+                .push(propid_io::tsv::copies_note(name, n, first));
+        }
+        report
+    };
+    // A slow sensor (a load cell logged in one row of ten, NaN between) leaves the complete rows
+    // one or two at a time, and the seed's window — the last run of them — a sample or two.
+    // Then the complete rows are fitted instead, as diagnose uses them.
+    let runs: u64 = chunks.iter().map(|c| c.runs).sum();
+    if 2 * runs > complete && 2 * run_rows < complete {
+        let sparse = Sparse {
+            rows,
+            complete,
+            run_rows,
+        };
+        let (report, kept) = fit_sparse(
+            data,
+            header_len,
+            &layout,
+            name,
+            options,
+            sparse,
+            want_samples,
+        )?;
+        return Ok((notes(report), kept));
+    }
     let window = Window {
         first,
         last,
@@ -445,12 +484,7 @@ fn fit_bytes(
             return Err(overflow_error(name, line, &s).into());
         }
     }
-    let mut report = report_of(&estimator, options, window, name)?;
-    if cut {
-        report
-            .warnings
-            .push(propid_io::tsv::cut_line_note(name, lines + 1));
-    }
+    let report = notes(report_of(&estimator, options, window, name)?);
     let mut kept = Vec::new();
     if want_samples {
         let keep_every = (n / 4000).max(1);
@@ -462,6 +496,82 @@ fn fit_bytes(
             i += 1;
         });
     }
+    Ok((report, kept))
+}
+
+/// What [`fit_sparse`] needs to know of the file's first pass.
+struct Sparse {
+    rows: u64,
+    complete: u64,
+    run_rows: u64,
+}
+
+/// The fit of a file whose complete rows come one or two at a time (a slow sensor): every
+/// complete row after the seed's 10 % cut (of the complete rows), in one more pass, with a
+/// warning that says so.
+fn fit_sparse(
+    data: &[u8],
+    from: usize,
+    layout: &Layout,
+    name: &str,
+    options: &FitOptions,
+    sparse: Sparse,
+    want_samples: bool,
+) -> Result<(FitReport, Vec<Sample>), FitError> {
+    let first = (0.1 * (sparse.complete - 1) as f64) as u64;
+    let keep_every = ((sparse.complete - first) / 4000).max(1);
+    let mut estimator = LoadEstimator::new();
+    let (mut row, mut complete, mut first_row, mut last_row) = (0u64, 0u64, 0u64, 0u64);
+    let mut overflow = None;
+    let mut kept = Vec::new();
+    scan::lines(data, from, data.len(), |line, bytes, _| {
+        // Every line parsed without error in the first pass.
+        let Ok(Some(v)) = layout.parse_line_converting(bytes, ALL_SLOTS) else {
+            return true;
+        };
+        row += 1;
+        if scan::incomplete(&v).is_some() {
+            return true;
+        }
+        complete += 1;
+        if complete <= first {
+            return true;
+        }
+        if complete == first + 1 {
+            first_row = row - 1;
+        }
+        last_row = row - 1;
+        estimator.update(v[2], v[3], v[4]);
+        if overflow.is_none() && !sums_finite(&estimator) {
+            overflow = Some((line + 1, row_of(&v).sample));
+        }
+        if want_samples && (complete - 1 - first) % keep_every == 0 {
+            kept.push(row_of(&v).sample);
+        }
+        true
+    });
+    if let Some((line, s)) = overflow {
+        return Err(overflow_error(name, line, &s).into());
+    }
+    let window = Window {
+        first: first_row,
+        last: last_row,
+        rows: sparse.rows,
+        complete: sparse.complete,
+        run_start: first_row,
+        breaker: None,
+    };
+    let mut report = report_of(&estimator, options, window, name)?;
+    report.warnings.insert(
+        0,
+        format!(
+            "{name}: only {} of {} rows have t, force, velocity and acceleration, and they come one or two at a time (a slow sensor such as a load cell, NaN between its samples): the seed's window, the last run of complete rows, would hold {} row(s); fitted instead are the {} complete rows after the seed's 10 % cut, as diagnose uses them",
+            sparse.complete,
+            sparse.rows,
+            sparse.run_rows,
+            sparse.complete - first
+        ),
+    );
     Ok((report, kept))
 }
 
@@ -589,6 +699,12 @@ fn report_of(
             "poor excitation (condition number {:.3e}): the data can hardly identify {}",
             est.condition_number,
             ["mass", "c1", "c2"][worst]
+        ));
+    }
+    if est.at_bound[0] {
+        warnings.push(format!(
+            "the mass sits on its bound ({:e}): these data do not identify it, and its standard error of 0 is not a precision (steady plateaus, or a force too slow for the dynamics: `propid diagnose` fits the steady-state drag law then)",
+            est.mass
         ));
     }
     let at_bound = ["mass", "c1", "c2"]

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use propid_io::import::{import_autoquad, import_rcbench, write_tsv, Imported, RcbenchOptions};
+use propid_io::import::{
+    import_autoquad_with, import_rcbench, write_tsv, Imported, RcbenchOptions,
+};
 use propid_io::output::Output;
 use propid_io::ErrorKind;
 
@@ -17,6 +19,10 @@ pub enum Command {
         /// The motor's kv [rpm/V] (gives Kt = 60/(2π·kv) N·m/A); finite and positive.
         #[arg(long)]
         kv: f64,
+        /// Set the velocity of samples found to be glitches (a jump away and straight back) to
+        /// NaN; without it they are reported and kept.
+        #[arg(long)]
+        despike: bool,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -28,6 +34,10 @@ pub enum Command {
         /// Subtract the torque measured at zero speed (the load cell's zero offset) from every sample.
         #[arg(long)]
         subtract_zero_offset: bool,
+        /// Set the velocity of samples found to be glitches (a jump away and straight back) to
+        /// NaN; without it they are reported and kept.
+        #[arg(long)]
+        despike: bool,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -38,6 +48,9 @@ pub enum Command {
 fn write(imported: &Imported, out: Output) -> anyhow::Result<()> {
     for a in &imported.assumptions {
         eprintln!("import: {a}");
+    }
+    for w in &imported.warnings {
+        eprintln!("warning: {w}");
     }
     let name = out.name();
     let out = write_tsv(imported, std::io::BufWriter::new(out))
@@ -53,9 +66,14 @@ fn write(imported: &Imported, out: Output) -> anyhow::Result<()> {
 /// the input itself), and written whole or not at all.
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
-        Command::Autoquad { file, kv, output } => {
+        Command::Autoquad {
+            file,
+            kv,
+            despike,
+            output,
+        } => {
             let out = Output::create(output.as_deref(), &[&file])?;
-            let imported = import_autoquad(&file, kv).map_err(|mut e| {
+            let imported = import_autoquad_with(&file, kv, despike).map_err(|mut e| {
                 // The library checks a value; here it is a flag.
                 if let ErrorKind::Invalid(message) = &mut e.kind {
                     *message = message.replace("kv must", "--kv must");
@@ -67,11 +85,13 @@ pub fn run(command: Command) -> anyhow::Result<()> {
         Command::Rcbench {
             file,
             subtract_zero_offset,
+            despike,
             output,
         } => {
             let out = Output::create(output.as_deref(), &[&file])?;
             let options = RcbenchOptions {
                 subtract_zero_offset,
+                despike,
             };
             write(&import_rcbench(&file, &options)?, out)
         }

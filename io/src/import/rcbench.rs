@@ -3,7 +3,8 @@
 use std::path::Path;
 
 use super::{
-    column, csv_error, csv_reader, differentiate, find_column, loose, mean_sd, number, open_csv,
+    column, csv_error, csv_reader, describe_dropped, despike, differentiate, duplicates_warning,
+    find_column, increasing_rows, loose, mean_sd, number, open_csv, DropReason, Dropped,
     ExtraColumn, Imported, UpdateRate,
 };
 use crate::input::LineLimit;
@@ -17,6 +18,9 @@ pub struct RcbenchOptions {
     /// from every torque (and thrust) sample. Off by default: the offsets are measured and
     /// reported, never removed silently.
     pub subtract_zero_offset: bool,
+    /// Set the velocity of the samples found to be glitches (a jump away and straight back) to
+    /// NaN. Off by default: glitches are found and reported, never removed silently.
+    pub despike: bool,
 }
 
 /// Column names seen in RCbenchmark and Tyto exports, compared loosely (case, `µ`/`u`,
@@ -287,11 +291,20 @@ fn rcbench(
         speeds: Vec<f64>,
         kept: Vec<f64>,
     }
-    let mut raw: Vec<Raw> = Vec::new();
-    let mut dropped_lines = Vec::new();
+    // Every row is read; then only the bad ones are dropped, each for itself.
+    let mut read: Vec<(u64, Raw)> = Vec::new();
+    let mut dropped: Vec<Dropped> = Vec::new();
+    let mut previous = csv::StringRecord::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
         let record = record.map_err(|e| csv_error(&file, &e, line))?;
+        if k > 0 && record.iter().eq(previous.iter()) {
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::Duplicate,
+            });
+            continue;
+        }
         let t = number(&record, time, &time_name, &file, line)? * time_scale;
         let q = number(&record, torque, &torque_name, &file, line)?;
         let speeds = speeds
@@ -302,20 +315,40 @@ fn rcbench(
             .iter()
             .map(|c| Ok((number(&record, c.index, &c.name, &file, line)? - c.offset) * c.scale))
             .collect::<Result<Vec<f64>, InputError>>()?;
+        previous = record;
         if !t.is_finite() {
-            return Err(InputError::invalid("no time".into())
-                .in_file(&file)
-                .at_line(line)
-                .in_column(&time_name));
-        }
-        // Time must increase strictly, as the TSV promises: a row repeating an earlier time
-        // is dropped and counted.
-        if raw.last().is_some_and(|p| t <= p.t) {
-            dropped_lines.push(line);
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::NoTime,
+            });
             continue;
         }
-        raw.push(Raw { t, q, speeds, kept });
+        read.push((line, Raw { t, q, speeds, kept }));
     }
+    let rows_in_log = read.len() + dropped.len();
+    let duplicates = dropped
+        .iter()
+        .filter(|d| d.reason == DropReason::Duplicate)
+        .count();
+    // Time must increase strictly, as the TSV promises: the fewest rows are dropped that make
+    // it so (a stale time costs its own row, not the rows until the clock passes it).
+    let times: Vec<f64> = read.iter().map(|(_, r)| r.t).collect();
+    // Of equally few, the rows dropped are those without a load-cell sample.
+    let thrust = kept
+        .iter()
+        .position(|c| c.to == Kept::Stand(StandColumn::Thrust));
+    let precious: Vec<bool> = read
+        .iter()
+        .map(|(_, r)| r.q.is_finite() || thrust.is_some_and(|k| r.kept[k].is_finite()))
+        .collect();
+    let (keep, out_of_order) = increasing_rows(&times, &precious);
+    dropped.extend(out_of_order.iter().map(|&(i, reason)| Dropped {
+        line: read[i].0,
+        reason,
+    }));
+    dropped.sort_by_key(|d| d.line);
+    let mut read: Vec<Option<(u64, Raw)>> = read.into_iter().map(Some).collect();
+    let (lines, raw): (Vec<u64>, Vec<Raw>) = keep.iter().filter_map(|&i| read[i].take()).unzip();
     if raw.len() < 2 {
         return Err(InputError::invalid(format!(
             "{} data rows with increasing time; at least 2 are needed",
@@ -344,18 +377,10 @@ fn rcbench(
         dt * 1e3,
         1.0 / dt
     ));
-    if !dropped_lines.is_empty() {
-        assumptions.push(format!(
-            "{} rows whose time does not increase were dropped (lines {}{})",
-            dropped_lines.len(),
-            dropped_lines
-                .iter()
-                .take(5)
-                .map(u64::to_string)
-                .collect::<Vec<_>>()
-                .join(", "),
-            if dropped_lines.len() > 5 { ", …" } else { "" }
-        ));
+    assumptions.extend(describe_dropped(&dropped, rows_in_log));
+    let mut warnings = Vec::new();
+    if duplicates > 0 {
+        warnings.push(duplicates_warning(duplicates, rows_in_log));
     }
 
     // The speed: the first of optical, electrical, generic that logged a non-zero value.
@@ -426,6 +451,13 @@ fn rcbench(
             row
         })
         .collect();
+    despike(
+        &mut rows,
+        &lines,
+        speed_name,
+        options.despike,
+        &mut warnings,
+    );
     differentiate(&mut rows);
     let top = top_speed(&rows);
 
@@ -524,6 +556,8 @@ fn rcbench(
         stand_columns,
         extra,
         assumptions,
+        dropped,
+        warnings,
     })
 }
 
