@@ -156,7 +156,7 @@ impl DriveConfig {
         check_range("pattern_duration", ex.duration, 0.0, true, DAY, "s")?;
         check_range("init_duration", ex.init_duration, 0.0, false, DAY, "s")?;
         ex.validate()
-            .map_err(|e| ConfigError::new("setpoint_rat_lo_hi", e.0))
+            .map_err(|e| ConfigError::new("setpoint_rat_lo_hi", e.to_string()))
     }
 }
 

@@ -249,7 +249,7 @@ pub fn parse_for(
     origin: &str,
 ) -> Result<Value, InputError> {
     parse_value(current, normalize_bool(text)).ok_or_else(|| {
-        InputError(format!(
+        InputError::invalid(format!(
             "{origin}: `{text}` is not a valid {} for register {name}",
             describe(current)
         ))
@@ -265,10 +265,10 @@ pub fn set_text(
 ) -> Result<(), InputError> {
     let current = r
         .get(name)
-        .ok_or_else(|| InputError(format!("{origin}: no register named {name}")))?;
+        .ok_or_else(|| InputError::invalid(format!("{origin}: no register named {name}")))?;
     let value = parse_for(&current.value, name, text, origin)?;
     r.set(name, &value)
-        .map_err(|e| InputError(format!("{origin}: {name}: {e}")))
+        .map_err(|e| InputError::invalid(format!("{origin}: {name}: {e}")))
 }
 
 /// Applies a register file's `name: value` lines.
@@ -282,7 +282,9 @@ pub fn apply_file(r: &mut HostRegistry, path: &Path, contents: &str) -> Result<(
         let (name, value) = line
             .split_once(':')
             .or_else(|| line.split_once('='))
-            .ok_or_else(|| InputError(format!("{origin}: expected `name: value`, got `{line}`")))?;
+            .ok_or_else(|| {
+                InputError::invalid(format!("{origin}: expected `name: value`, got `{line}`"))
+            })?;
         set_text(r, name.trim(), value.trim(), &origin)?;
     }
     Ok(())
@@ -526,13 +528,13 @@ mod tests {
         let mut r = drive_defaults(false);
         let e = apply_file(&mut r, Path::new("x.reg"), "\n\nperiod: fast\n").unwrap_err();
         assert_eq!(
-            e.0,
+            e.to_string(),
             "x.reg:3: `fast` is not a valid real64[1] for register period"
         );
         let e = apply_file(&mut r, Path::new("x.reg"), "no_such: 1").unwrap_err();
-        assert_eq!(e.0, "x.reg:1: no register named no_such");
+        assert_eq!(e.to_string(), "x.reg:1: no register named no_such");
         let e = set_text(&mut r, "uavcan.node.id", "-1", "UAVCAN__NODE__ID").unwrap_err();
-        assert!(e.0.contains("natural16[1]"), "{}", e.0);
+        assert!(e.to_string().contains("natural16[1]"), "{e}");
         let mut cfg = example();
         let e = apply_drive_registers(&r, &mut cfg).unwrap_err();
         assert_eq!(e.setting, "uavcan.node.id");

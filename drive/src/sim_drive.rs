@@ -86,7 +86,7 @@ impl SimDriveConfig {
         check_range("duration", self.duration, 0.0, false, DAY, "s")?;
         self.stand
             .validate()
-            .map_err(|e| ConfigError::new("stand", e.0))
+            .map_err(|e| ConfigError::new("stand", e.to_string()))
     }
 }
 

@@ -24,20 +24,20 @@ pub struct BusArgs {
 impl BusArgs {
     /// Opens the bus these arguments name.
     pub fn open(&self) -> anyhow::Result<Box<dyn CanTransport>> {
-        let iface = self
-            .iface
-            .as_deref()
-            .ok_or_else(|| InputError("no interface: give --iface or UAVCAN__CAN__IFACE".into()))?;
+        let iface = self.iface.as_deref().ok_or_else(|| {
+            InputError::invalid("no interface: give --iface or UAVCAN__CAN__IFACE".into())
+        })?;
         open(iface, &self.bitrate, self.mtu)
     }
 }
 
 /// Opens the interface. SLCAN is Classic CAN only: MTU 64 is refused before anything is sent.
 pub fn open(iface: &str, bitrate: &str, mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
-    let spec = IfaceSpec::parse(iface).map_err(|e| InputError(e.to_string()))?;
-    let (arbitration, _data) = parse_bitrate(bitrate).map_err(|e| InputError(e.to_string()))?;
+    let spec = IfaceSpec::parse(iface).map_err(|e| InputError::invalid(e.to_string()))?;
+    let (arbitration, _data) =
+        parse_bitrate(bitrate).map_err(|e| InputError::invalid(e.to_string()))?;
     if mtu != 8 && mtu != 64 {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "MTU must be 8 (Classic CAN) or 64 (CAN FD), got {mtu}"
         ))
         .into());
@@ -45,7 +45,7 @@ pub fn open(iface: &str, bitrate: &str, mtu: usize) -> anyhow::Result<Box<dyn Ca
     Ok(match spec {
         IfaceSpec::Slcan { path, baud } => {
             if mtu != 8 {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "{iface}: SLCAN carries Classic CAN only; set UAVCAN__CAN__MTU=8 (got {mtu})"
                 ))
                 .into());
@@ -69,7 +69,7 @@ fn open_socketcan(_iface: &str, name: &str, mtu: usize) -> anyhow::Result<Box<dy
 
 #[cfg(not(target_os = "linux"))]
 fn open_socketcan(iface: &str, _name: &str, _mtu: usize) -> anyhow::Result<Box<dyn CanTransport>> {
-    Err(InputError(format!(
+    Err(InputError::invalid(format!(
         "{iface}: socketcan is only available on Linux; use an SLCAN adapter (slcan:DEVICE[@BAUD])"
     ))
     .into())

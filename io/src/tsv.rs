@@ -17,6 +17,8 @@
 
 use std::io::{BufRead, Write};
 
+use crate::error::{Compression, ErrorKind, InputError};
+
 /// One measurement of the drive's dynamics feedback.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sample {
@@ -44,8 +46,9 @@ impl Sample {
 
 /// What a test stand measures beside the drive's dynamics feedback, in the same row. Each is NaN
 /// where the source has no such column or no sample in this row (a slow load cell leaves most
-/// rows empty): never interpolated, never held.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// rows empty): never interpolated, never held. Two `Stand`s are equal when each value is equal
+/// or both are absent (NaN), so rows of the seed's columns compare as they did before.
+#[derive(Clone, Copy, Debug)]
 pub struct Stand {
     /// Thrust [N] (a propeller pushing air: positive along its thrust axis).
     pub thrust: f64,
@@ -85,6 +88,15 @@ impl Stand {
             StandColumn::Current => &mut self.current,
             StandColumn::Command => &mut self.command,
         }
+    }
+}
+
+impl PartialEq for Stand {
+    fn eq(&self, other: &Stand) -> bool {
+        StandColumn::ALL.iter().all(|c| {
+            let (a, b) = (self.get(*c), other.get(*c));
+            a == b || (a.is_nan() && b.is_nan())
+        })
     }
 }
 
@@ -196,66 +208,6 @@ pub const COLUMNS: [&str; SLOTS] = [
 /// The values of one line, by slot of [`COLUMNS`] (NaN where empty or absent).
 pub type Values = [f64; SLOTS];
 
-/// Why a TSV could not be read. Every variant names where.
-#[derive(Debug, thiserror::Error)]
-pub enum TsvError {
-    /// The input has no header line.
-    #[error("{source_name}: empty input (no header line)")]
-    Empty {
-        /// File name or `<stdin>`.
-        source_name: String,
-    },
-    /// A required column is missing from the header.
-    #[error("{source_name}: line 1: missing column `{column}` (header has: {header})")]
-    MissingColumn {
-        /// File name or `<stdin>`.
-        source_name: String,
-        /// The missing column.
-        column: &'static str,
-        /// The header as found.
-        header: String,
-    },
-    /// A field is not a number.
-    #[error("{source_name}: line {line}, column `{column}`: `{text}` is not a number")]
-    NotANumber {
-        /// File name or `<stdin>`.
-        source_name: String,
-        /// 1-based line number.
-        line: u64,
-        /// Column name.
-        column: String,
-        /// The offending text (shortened).
-        text: String,
-    },
-    /// A row has fewer fields than a required column's index.
-    #[error(
-        "{source_name}: line {line}: row has {found} fields, column `{column}` is field {needed}"
-    )]
-    ShortRow {
-        /// File name or `<stdin>`.
-        source_name: String,
-        /// 1-based line number.
-        line: u64,
-        /// Column name.
-        column: String,
-        /// Fields present.
-        found: usize,
-        /// 1-based index of the column.
-        needed: usize,
-    },
-    /// Reading failed.
-    #[error("{source_name}: line {line}: {source}")]
-    Io {
-        /// File name or `<stdin>`.
-        source_name: String,
-        /// 1-based line number where reading failed.
-        line: u64,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
-    },
-}
-
 /// Where the columns are in a row, found from the header: the byte-level row parser behind
 /// [`TsvReader`], also usable on a memory-mapped file split among threads (lines are
 /// independent).
@@ -279,6 +231,8 @@ pub enum RowError {
         /// The offending text (shortened).
         text: String,
     },
+    /// The line is longer than [`MAX_LINE`] bytes.
+    LineTooLong,
     /// The row ends before a required column.
     ShortRow {
         /// Slot in [`COLUMNS`].
@@ -292,28 +246,25 @@ pub enum RowError {
 
 impl RowError {
     /// The error with its place.
-    pub fn at(self, source_name: &str, line: u64) -> TsvError {
-        match self {
-            RowError::NotANumber { slot, text } => TsvError::NotANumber {
-                source_name: source_name.to_string(),
-                line,
-                column: COLUMNS[slot].to_string(),
-                text,
-            },
+    pub fn at(self, source_name: &str, line: u64) -> InputError {
+        let e = match self {
+            RowError::NotANumber { slot, text } => {
+                InputError::new(ErrorKind::NotANumber { text }).in_column(COLUMNS[slot])
+            }
+            RowError::LineTooLong => InputError::new(ErrorKind::LineTooLong { limit: MAX_LINE }),
             RowError::ShortRow {
                 slot,
                 found,
                 needed,
-            } => TsvError::ShortRow {
-                source_name: source_name.to_string(),
-                line,
-                column: COLUMNS[slot].to_string(),
-                found,
-                needed,
-            },
-        }
+            } => InputError::new(ErrorKind::ShortRow { found, needed }).in_column(COLUMNS[slot]),
+        };
+        e.in_file(source_name).at_line(line)
     }
 }
+
+/// The longest line a reader accepts [bytes]: a row of a log is a few hundred bytes, so a longer
+/// "line" is another kind of file, and reading it whole could take any amount of memory.
+pub const MAX_LINE: usize = 64 << 10;
 
 /// The bytes `str::trim` removes that are ASCII (Unicode White_Space below 0x80).
 fn is_space(b: u8) -> bool {
@@ -460,6 +411,9 @@ impl Layout {
         if line.first().is_none_or(|b| is_space(*b) || *b >= 0x80) && Self::is_blank(line) {
             return Ok(None);
         }
+        if line.len() > MAX_LINE {
+            return Err(RowError::LineTooLong);
+        }
         let mut values = [f64::NAN; SLOTS];
         let mut found = 0usize;
         let mut rest = line;
@@ -545,7 +499,10 @@ pub fn row_of(v: &Values) -> Row {
     }
 }
 
-/// Streams rows from a TSV in constant memory.
+/// Streams rows from a TSV in constant memory: lines longer than [`MAX_LINE`] are an error
+/// (never read whole), a compressed or binary input is named as such, and a last line without a
+/// line end — a file cut while it was written — is not used but reported
+/// ([`TsvReader::truncated_line`]).
 pub struct TsvReader<R> {
     input: R,
     source_name: String,
@@ -553,36 +510,104 @@ pub struct TsvReader<R> {
     line: Vec<u8>,
     layout: Layout,
     bytes_read: u64,
+    truncated: Option<u64>,
+    previous_t: f64,
+    repeated_times: u64,
+    first_repeated_time: Option<u64>,
+}
+
+/// Reads one line into `buf` (its `\n` included if it has one), at most `limit` bytes of it:
+/// `Ok(None)` at the end of the input, `Ok(Some(false))` for a line longer than `limit` (the
+/// bytes beyond it are not read).
+fn read_line_bounded<R: BufRead>(
+    input: &mut R,
+    buf: &mut Vec<u8>,
+    limit: usize,
+) -> std::io::Result<Option<bool>> {
+    buf.clear();
+    loop {
+        let available = match input.fill_buf() {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if available.is_empty() {
+            return Ok((!buf.is_empty()).then_some(true));
+        }
+        let (take, done) = match memchr::memchr(b'\n', available) {
+            Some(i) => (i + 1, true),
+            None => (available.len(), false),
+        };
+        if buf.len() + take > limit + 2 {
+            // Room for a `\r\n` after `limit` bytes of text.
+            let room = (limit + 2).saturating_sub(buf.len());
+            buf.extend_from_slice(&available[..room.min(take)]);
+            input.consume(room.min(take));
+            return Ok(Some(false));
+        }
+        buf.extend_from_slice(&available[..take]);
+        input.consume(take);
+        if done {
+            return Ok(Some(true));
+        }
+    }
+}
+
+/// Why the first bytes of a TSV are not its header: compressed, or not text.
+fn not_text(head: &[u8]) -> Option<ErrorKind> {
+    if let Some(c) = Compression::sniff(head) {
+        return Some(ErrorKind::Compressed(c));
+    }
+    // A multi-byte character cut by the end of `head` is not an error (`error_len` is None).
+    let invalid = std::str::from_utf8(head).is_err_and(|e| e.error_len().is_some());
+    (head.contains(&0) || invalid).then_some(ErrorKind::NotText)
 }
 
 impl<R: BufRead> TsvReader<R> {
     /// Reads the header. `source_name` is used in error messages (file path or `<stdin>`).
-    pub fn new(mut input: R, source_name: impl Into<String>) -> Result<Self, TsvError> {
+    pub fn new(mut input: R, source_name: impl Into<String>) -> Result<Self, InputError> {
         let source_name = source_name.into();
-        let mut header = String::new();
-        let n = input.read_line(&mut header).map_err(|e| TsvError::Io {
-            source_name: source_name.clone(),
-            line: 1,
-            source: e,
-        })?;
-        let header_trimmed = header
+        let at = |kind: ErrorKind| {
+            InputError::new(kind)
+                .in_file(source_name.clone())
+                .at_line(1)
+        };
+        let mut header = Vec::new();
+        let read = read_line_bounded(&mut input, &mut header, MAX_LINE)
+            .map_err(|e| InputError::os(source_name.clone(), "cannot read", &e).at_line(1))?;
+        if let Some(kind) = not_text(&header[..header.len().min(64)]) {
+            return Err(at(kind));
+        }
+        match read {
+            None => return Err(InputError::new(ErrorKind::Empty).in_file(source_name)),
+            Some(false) => return Err(at(ErrorKind::LineTooLong { limit: MAX_LINE })),
+            Some(true) => {}
+        }
+        let Ok(header_text) = std::str::from_utf8(&header) else {
+            return Err(at(ErrorKind::NotText));
+        };
+        let header_trimmed = header_text
             .trim_end_matches(['\r', '\n'])
             .trim_start_matches('\u{feff}');
-        if n == 0 || header_trimmed.trim().is_empty() {
-            return Err(TsvError::Empty { source_name });
+        if header_trimmed.trim().is_empty() {
+            let mut e = at(ErrorKind::Empty);
+            e.place.line = None;
+            return Err(e);
         }
         let names: Vec<&str> = header_trimmed.split('\t').map(str::trim).collect();
         let mut idx = [None; SLOTS];
         for (slot, want) in idx.iter_mut().zip(COLUMNS) {
             *slot = names.iter().position(|n| *n == want);
         }
-        for (i, want) in HEADER.iter().enumerate().take(5).skip(1) {
+        for (i, want) in COLUMNS.iter().enumerate().take(5).skip(1) {
             if idx[i].is_none() {
-                return Err(TsvError::MissingColumn {
-                    source_name,
-                    column: want,
-                    header: names.join(", "),
-                });
+                if let Some(importer) = crate::import::recognise(header_trimmed) {
+                    return Err(at(ErrorKind::ForeignFormat(importer)));
+                }
+                return Err(at(ErrorKind::MissingColumn {
+                    wanted: (*want).into(),
+                    columns: shorten_list(&names),
+                }));
             }
         }
         Ok(TsvReader {
@@ -591,7 +616,11 @@ impl<R: BufRead> TsvReader<R> {
             line_no: 1,
             line: Vec::new(),
             layout: Layout::new(idx),
-            bytes_read: n as u64,
+            bytes_read: header.len() as u64,
+            truncated: None,
+            previous_t: f64::NAN,
+            repeated_times: 0,
+            first_repeated_time: None,
         })
     }
 
@@ -633,31 +662,171 @@ impl<R: BufRead> TsvReader<R> {
         &self.source_name
     }
 
+    /// The line that ended the input without a line end, if any: a file cut while it was
+    /// written (its last number may be cut short), so it was not returned as a row. Known once
+    /// [`TsvReader::next_row`] has returned `None`.
+    pub fn truncated_line(&self) -> Option<u64> {
+        self.truncated
+    }
+
+    /// Rows whose time `t` equals the previous row's, and the line of the first: a log written
+    /// twice, or rows duplicated, which make every standard error too small.
+    pub fn repeated_times(&self) -> (u64, Option<u64>) {
+        (self.repeated_times, self.first_repeated_time)
+    }
+
     /// The next row, `None` at the end. Blank lines are skipped.
-    pub fn next_row(&mut self) -> Result<Option<Row>, TsvError> {
+    pub fn next_row(&mut self) -> Result<Option<Row>, InputError> {
         loop {
-            self.line.clear();
-            let n = self
-                .input
-                .read_until(b'\n', &mut self.line)
-                .map_err(|e| TsvError::Io {
-                    source_name: self.source_name.clone(),
-                    line: self.line_no + 1,
-                    source: e,
+            let read =
+                read_line_bounded(&mut self.input, &mut self.line, MAX_LINE).map_err(|e| {
+                    InputError::os(self.source_name.clone(), "cannot read", &e)
+                        .at_line(self.line_no + 1)
                 })?;
-            if n == 0 {
+            let Some(terminated) = read else {
                 return Ok(None);
-            }
-            self.bytes_read += n as u64;
+            };
+            self.bytes_read += self.line.len() as u64;
             self.line_no += 1;
-            let line = self.line.strip_suffix(b"\n").unwrap_or(&self.line);
+            if !terminated {
+                return Err(RowError::LineTooLong.at(&self.source_name, self.line_no));
+            }
+            let (line, ends) = match self.line.strip_suffix(b"\n") {
+                Some(l) => (l, true),
+                None => (&self.line[..], false),
+            };
             match self.layout.parse_line(line) {
                 Ok(None) => continue,
-                Ok(Some(v)) => return Ok(Some(row_of(&v))),
+                Ok(Some(_)) if !ends => {
+                    self.truncated = Some(self.line_no);
+                    return Ok(None);
+                }
+                Ok(Some(v)) => {
+                    let t = v[1];
+                    if t == self.previous_t {
+                        self.repeated_times += 1;
+                        self.first_repeated_time.get_or_insert(self.line_no);
+                    }
+                    self.previous_t = t;
+                    return Ok(Some(row_of(&v)));
+                }
+                // A cut last line may be cut inside a number or before a column: it is
+                // reported as cut, not as a bad field.
+                Err(_) if !ends => {
+                    self.truncated = Some(self.line_no);
+                    return Ok(None);
+                }
                 Err(e) => return Err(e.at(&self.source_name, self.line_no)),
             }
         }
     }
+}
+
+/// A whole TSV read into memory, with what the reader noticed on the way.
+pub struct Table {
+    /// The file's name for messages (`<stdin>` for `-`).
+    pub name: String,
+    /// The rows kept.
+    pub rows: Vec<Row>,
+    /// Rows read but not kept (see [`read_rows`]).
+    pub skipped: usize,
+    /// The stand columns the file has.
+    pub stand_columns: Vec<StandColumn>,
+    /// The last line, cut without a line end, that was not used ([`TsvReader::truncated_line`]).
+    pub truncated_line: Option<u64>,
+    /// Rows repeating the previous row's time, and the first's line
+    /// ([`TsvReader::repeated_times`]).
+    pub repeated_times: (u64, Option<u64>),
+}
+
+impl Table {
+    /// What a command should tell its user about the file, one sentence each: a cut last line,
+    /// repeated times.
+    pub fn notes(&self) -> Vec<String> {
+        let mut notes = Vec::new();
+        if let Some(line) = self.truncated_line {
+            notes.push(cut_line_note(&self.name, line));
+        }
+        if let (n @ 1.., Some(first)) = self.repeated_times {
+            notes.push(format!(
+                "{}: {n} rows repeat the previous row's time (the first at line {first}): duplicated rows count twice and make every standard error too small (by √2 when every row is doubled); remove them if they are copies",
+                self.name
+            ));
+        }
+        notes
+    }
+}
+
+/// What to tell a user about `n` rows that are copies of the row before them (the first at
+/// `first`).
+pub fn copies_note(name: &str, n: u64, first: u64) -> String {
+    format!(
+        "{name}: {n} rows are copies of the row before them (the first at line {first}): each copy counts as another measurement, which makes every standard error too small (by √2 when every row is doubled); remove them if the log was written twice"
+    )
+}
+
+/// What to tell a user about a last line cut without a line end ([`TsvReader::truncated_line`]).
+pub fn cut_line_note(name: &str, line: u64) -> String {
+    format!(
+        "{name}: line {line} has no line end (the file was cut while it was written, perhaps inside a number): that line is not used"
+    )
+}
+
+/// `data` without its last line if that line has no line end and is a row (not blank), and
+/// whether it was cut off; lines before `from` (the header) and lines longer than [`MAX_LINE`]
+/// (an error wherever they are) are never cut. The same rule as
+/// [`TsvReader`]'s, for readers of a whole file in memory.
+pub fn without_cut_line(data: &[u8], from: usize) -> (&[u8], bool) {
+    if data.len() <= from || data.last() == Some(&b'\n') {
+        return (data, false);
+    }
+    let start = memchr::memrchr(b'\n', &data[from..]).map_or(from, |i| from + i + 1);
+    // A line past the bound is that error, whether it ends or not.
+    if data.len() - start <= MAX_LINE && Layout::is_row(&data[start..]) {
+        (&data[..start], true)
+    } else {
+        (data, false)
+    }
+}
+
+/// Reads the TSV at `path` ([`crate::input::open`]: `-` is standard input, gzip is read
+/// through, lines are bounded) and keeps the rows for which `keep` is true.
+pub fn read_rows(path: &std::path::Path, keep: impl Fn(&Row) -> bool) -> Result<Table, InputError> {
+    let input = crate::input::open(path)?;
+    let name = input.name().to_owned();
+    let mut reader = TsvReader::new(input, name.clone())?;
+    let (mut rows, mut skipped) = (Vec::new(), 0);
+    while let Some(row) = reader.next_row()? {
+        if keep(&row) {
+            rows.push(row);
+        } else {
+            skipped += 1;
+        }
+    }
+    Ok(Table {
+        name,
+        rows,
+        skipped,
+        stand_columns: reader.stand_columns(),
+        truncated_line: reader.truncated_line(),
+        repeated_times: reader.repeated_times(),
+    })
+}
+
+/// The names joined with `, `, shortened to about 200 characters (a header can be anything).
+fn shorten_list(names: &[&str]) -> String {
+    let mut out = String::new();
+    for (k, name) in names.iter().enumerate() {
+        if out.len() + name.len() > 200 {
+            out += &format!(", … ({} more)", names.len() - k);
+            break;
+        }
+        if k > 0 {
+            out += ", ";
+        }
+        out.extend(name.chars().take(40));
+    }
+    out
 }
 
 /// Parses one field: a float, `nan`/`inf` in any case, or empty (NaN).
@@ -837,7 +1006,7 @@ mod tests {
                 _ => panic!("`{c}`: std {want:?}, fast {got:?}"),
             }
             // The same through a whole line (the parser's shortcut before the tab).
-            let line = format!("t\tforce\tvelocity\tacceleration\n{c}\t2\t{c}\t{c}");
+            let line = format!("t\tforce\tvelocity\tacceleration\n{c}\t2\t{c}\t{c}\n");
             let mut r = TsvReader::new(line.as_bytes(), "mem").unwrap();
             match (want, r.next_row()) {
                 (Some(a), Ok(Some(row))) => {
@@ -848,7 +1017,13 @@ mod tests {
                         );
                     }
                 }
-                (None, Err(TsvError::NotANumber { .. })) => {}
+                (
+                    None,
+                    Err(InputError {
+                        kind: ErrorKind::NotANumber { .. },
+                        ..
+                    }),
+                ) => {}
                 (Some(_), Ok(None)) if c.trim().is_empty() => {}
                 (w, g) => panic!("`{c}` in a line: std {w:?}, reader {g:?}"),
             }
@@ -926,12 +1101,85 @@ mod tests {
 
     #[test]
     fn lines_with_crlf_blank_and_unicode_space() {
-        let text = "t\tforce\tvelocity\tacceleration\r\n1\t2\t3\t4\r\n \t \r\n\u{a0}\n5\t6\t7\t8";
+        let text =
+            "t\tforce\tvelocity\tacceleration\r\n1\t2\t3\t4\r\n \t \r\n\u{a0}\n5\t6\t7\t8\r\n";
         let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
         assert_eq!(r.next_row().unwrap().unwrap().sample.acceleration, 4.0);
         assert_eq!(r.next_row().unwrap().unwrap().sample.t, 5.0);
         assert_eq!(r.line_number(), 5);
         assert!(r.next_row().unwrap().is_none());
+        assert_eq!(r.truncated_line(), None);
+    }
+
+    /// A last line without a line end was cut while the file was written: not a row, reported
+    /// (whether it still parses or was cut inside a number or before a column); a blank one is
+    /// nothing.
+    #[test]
+    fn a_cut_last_line_is_reported_not_used() {
+        for last in ["5\t6\t7\t8", "5\t6\t7\t8.2e", "5\t6\t7", "5\t6\t7\t8\r"] {
+            let text = format!("t\tforce\tvelocity\tacceleration\n1\t2\t3\t4\n{last}");
+            let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+            assert_eq!(r.next_row().unwrap().unwrap().sample.t, 1.0);
+            assert!(r.next_row().unwrap().is_none(), "{last:?}");
+            assert_eq!(r.truncated_line(), Some(3), "{last:?}");
+        }
+        let text = "t\tforce\tvelocity\tacceleration\n1\t2\t3\t4\n \t";
+        let mut r = TsvReader::new(text.as_bytes(), "mem").unwrap();
+        assert!(r.next_row().unwrap().is_some());
+        assert!(r.next_row().unwrap().is_none());
+        assert_eq!(r.truncated_line(), None);
+    }
+
+    /// A line longer than MAX_LINE is an error naming it, read no further than the bound; the
+    /// header likewise; compressed and binary input is named as such.
+    #[test]
+    fn long_lines_compressed_and_binary_input() {
+        struct Endless(u8);
+        impl std::io::Read for Endless {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                buf.fill(self.0);
+                Ok(buf.len())
+            }
+        }
+        let e = TsvReader::new(std::io::BufReader::new(Endless(b'7')), "<stdin>")
+            .err()
+            .unwrap();
+        assert_eq!(e.kind, ErrorKind::LineTooLong { limit: MAX_LINE });
+        assert_eq!(e.place.line, Some(1));
+        assert!(e
+            .to_string()
+            .starts_with("<stdin>: line 1: the line is longer than 64 KiB"));
+        let e = TsvReader::new(std::io::BufReader::new(Endless(0)), "<stdin>")
+            .err()
+            .unwrap();
+        assert_eq!(e.kind, ErrorKind::NotText, "{e}");
+        let head = "t\tforce\tvelocity\tacceleration\n1\t2\t3\t4\n";
+        let input = std::io::Read::chain(head.as_bytes(), Endless(b'1'));
+        let mut r = TsvReader::new(std::io::BufReader::new(input), "big.tsv").unwrap();
+        assert!(r.next_row().unwrap().is_some());
+        let e = r.next_row().err().unwrap();
+        assert_eq!(
+            (e.kind.clone(), e.place.line),
+            (ErrorKind::LineTooLong { limit: MAX_LINE }, Some(3))
+        );
+        assert!(r.line.len() <= MAX_LINE + 2);
+        let e = TsvReader::new(&[0x1f, 0x8b, 8, 0, 0, 0][..], "run.tsv.gz")
+            .err()
+            .unwrap();
+        assert_eq!(e.kind, ErrorKind::Compressed(Compression::Gzip));
+        assert_eq!(e.place.file.as_deref(), Some("run.tsv.gz"));
+        // A header cut inside a multi-byte character at 64 bytes is still text.
+        let header = format!("{}µ\tt\tforce\tvelocity\tacceleration\n", "x".repeat(63));
+        assert!(TsvReader::new(header.as_bytes(), "m").is_ok());
+    }
+
+    /// Rows repeating the previous row's time are counted (a log written twice).
+    #[test]
+    fn repeated_times_are_counted() {
+        let text = "t\tforce\tvelocity\tacceleration\n1\t2\t3\t4\n1\t2\t3\t4\n2\t2\t3\t4\n2\t2\t3\t4\n3\t0\t0\t0\n";
+        let mut r = TsvReader::new(text.as_bytes(), "m").unwrap();
+        while r.next_row().unwrap().is_some() {}
+        assert_eq!(r.repeated_times(), (2, Some(3)));
     }
 
     #[test]
@@ -971,7 +1219,7 @@ mod tests {
             .err()
             .unwrap();
         assert!(
-            err.to_string().contains("missing column `acceleration`"),
+            err.to_string().contains("no column `acceleration`"),
             "{err}"
         );
         let mut r = TsvReader::new(
@@ -986,7 +1234,10 @@ mod tests {
         );
         assert!(matches!(
             TsvReader::new(&b""[..], "e"),
-            Err(TsvError::Empty { .. })
+            Err(InputError {
+                kind: ErrorKind::Empty,
+                ..
+            })
         ));
     }
 

@@ -107,7 +107,9 @@ impl StandConfig {
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be positive (got {v})")));
+                return Err(InputError::invalid(format!(
+                    "{name} must be positive (got {v})"
+                )));
             }
         }
         let non_negative = [
@@ -124,7 +126,7 @@ impl StandConfig {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
         }
         Ok(())

@@ -68,6 +68,7 @@ fn import(csv: &str, subtract: bool) -> propid_io::import::Imported {
         &p,
         &RcbenchOptions {
             subtract_zero_offset: subtract,
+            ..RcbenchOptions::default()
         },
     )
     .unwrap()
@@ -378,4 +379,117 @@ fn thrust_voltage_current_command_and_power_are_kept() {
             "{e}"
         );
     }
+}
+
+/// One bad row costs one row (issue 26, item 5): a stale time in the first data row (the next
+/// rows restart near 0), a row whose time goes back, an empty time, a copied line — each is
+/// dropped alone and listed with its line and reason; the rest of the log is kept.
+#[test]
+fn a_bad_row_costs_that_row_only_and_is_listed() {
+    let stand = Stand {
+        torque_every: 5,
+        reaction: false,
+        millis: false,
+        optical: true,
+    };
+    let (csv, _) = tyto_csv(&stand);
+    let mut lines: Vec<String> = csv.lines().map(str::to_owned).collect();
+    // Line 2 (the first data row): a stale time of 7.5 s.
+    lines[1] = lines[1].replacen("0,", "7.5,", 1);
+    // Line 501: back to the time of line 401; line 601: no time; line 701 copied once.
+    let back = lines[400].split(',').next().unwrap().to_owned();
+    let (_, rest) = lines[500].split_once(',').unwrap();
+    lines[500] = format!("{back},{rest}");
+    let (_, rest) = lines[600].split_once(',').unwrap();
+    lines[600] = format!(",{rest}");
+    lines.insert(701, lines[700].clone());
+    let im = import(&(lines.join("\n") + "\n"), false);
+    assert_eq!(im.rows.len(), 1000 - 3, "{:#?}", im.dropped);
+    use propid_io::import::{DropReason, Dropped};
+    assert_eq!(
+        im.dropped,
+        [
+            Dropped {
+                line: 2,
+                reason: DropReason::TimeAhead
+            },
+            Dropped {
+                line: 501,
+                reason: DropReason::TimeGoesBack
+            },
+            Dropped {
+                line: 601,
+                reason: DropReason::NoTime
+            },
+            Dropped {
+                line: 702,
+                reason: DropReason::Duplicate
+            },
+        ]
+    );
+    let said = said(&im, "rows dropped");
+    assert!(
+        said.starts_with("4 of 1001 rows dropped, each for itself: line 2 (the time is later than the rows after it (stale))"),
+        "{said}"
+    );
+    assert!(im
+        .warnings
+        .iter()
+        .any(|w| w.contains("1 of 1001 lines repeat the line before them")));
+    assert!(im.rows.windows(2).all(|w| w[1].sample.t > w[0].sample.t));
+}
+
+/// Velocity glitches (a sample jumping away and straight back) are found and reported with
+/// their lines; kept unless --despike, which sets their velocity to NaN (nothing interpolated).
+/// Real steps are not glitches.
+#[test]
+fn velocity_glitches_are_reported_and_removed_only_when_asked() {
+    let stand = Stand {
+        torque_every: 1,
+        reaction: false,
+        millis: false,
+        optical: true,
+    };
+    let (csv, _) = tyto_csv(&stand);
+    let mut lines: Vec<String> = csv.lines().map(str::to_owned).collect();
+    // Lines 302 and 802: the optical probe counts a mark twice (+400 rpm) for one sample.
+    for k in [301, 801] {
+        let mut f: Vec<String> = lines[k].split(',').map(str::to_owned).collect();
+        let rpm: f64 = f[7].parse().unwrap();
+        f[7] = (rpm + 400.0).to_string();
+        lines[k] = f.join(",");
+    }
+    let text = lines.join("\n") + "\n";
+    let clean = import(&csv, false);
+    assert!(clean.warnings.is_empty(), "{:?}", clean.warnings);
+    let kept = import(&text, false);
+    let w = kept
+        .warnings
+        .iter()
+        .find(|w| w.contains("glitches"))
+        .unwrap();
+    assert!(
+        w.contains("2 samples") && w.contains("lines 302, 802") && w.contains("--despike"),
+        "{w}"
+    );
+    assert!(kept.rows[300].sample.velocity.is_finite());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("g.csv");
+    std::fs::write(&p, &text).unwrap();
+    let removed = import_rcbench(
+        &p,
+        &RcbenchOptions {
+            despike: true,
+            ..RcbenchOptions::default()
+        },
+    )
+    .unwrap();
+    for k in 0..1000 {
+        assert_eq!(
+            removed.rows[k].sample.velocity.is_nan(),
+            k == 300 || k == 800,
+            "row {k}"
+        );
+    }
+    assert!(removed.warnings[0].contains("NaN in the TSV (--despike)"));
 }

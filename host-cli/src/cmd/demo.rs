@@ -80,12 +80,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     cfg.validate().map_err(|e| {
         // The demo's own flags: --duration and --init-duration.
         let e = crate::cmd::drive::flag_error(e);
-        crate::InputError(
-            e.0.replace(
-                "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
-                "--duration",
-            )
-            .replace(" (register init_duration, INIT_DURATION)", ""),
+        crate::InputError::invalid(
+            e.to_string()
+                .replace(
+                    "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
+                    "--duration",
+                )
+                .replace(" (register init_duration, INIT_DURATION)", ""),
         )
     })?;
     let (mut transport, mut telega_end, pty) = link()?;
@@ -162,7 +163,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Diagnose.
     let (all, _) = read_samples(&tsv)?;
     let report = diagnose(&all, Default::default())
-        .map_err(|e| anyhow::anyhow!("{}: {}", tsv.display(), e.0))?;
+        .map_err(|e| anyhow::anyhow!("{}: {e}", tsv.display()))?;
     let text = to_text(&report, &tsv.display().to_string());
     std::fs::write(args.out.join("diagnose.txt"), &text)?;
     std::fs::write(

@@ -129,14 +129,14 @@ impl Args {
         let mut r = registers::drive_defaults(self.registers.is_some());
         if let Some(path) = &self.registers {
             let text = std::fs::read_to_string(path).map_err(|e| {
-                InputError(format!(
+                InputError::invalid(format!(
                     "cannot read the register file {}: {e}",
                     path.display()
                 ))
             })?;
-            registers::apply_file(&mut r, path, &text).map_err(|e| InputError(e.0))?;
+            registers::apply_file(&mut r, path, &text)?;
         }
-        registers::apply_environment(&mut r, vars).map_err(|e| InputError(e.0))?;
+        registers::apply_environment(&mut r, vars)?;
         let mut set = |name: &str, v: Option<Value>| {
             if let Some(v) = v {
                 // The flags are typed: the conversion to the register's type cannot fail.
@@ -180,7 +180,7 @@ impl Args {
         let until_rel_stderr = match self.until_stderr {
             Some(p) if p > 0.0 && p < 100.0 => Some(p / 100.0),
             Some(p) => {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "--until-stderr must be a percentage in (0, 100) (got {p})"
                 )))
             }
@@ -251,21 +251,21 @@ pub fn flag_error(e: ConfigError) -> InputError {
         "mtu" => ("--mtu", None),
         "interval" => ("--interval", None),
         "duration" => ("--duration", None),
-        other => return InputError(format!("{other}: {}", e.problem)),
+        other => return InputError::invalid(format!("{other}: {}", e.problem)),
     };
     match register {
-        Some(reg) => InputError(format!(
+        Some(reg) => InputError::invalid(format!(
             "{flag} (register {reg}, {}) {}",
             registers::environment_name(reg),
             e.problem
         )),
-        None => InputError(format!("{flag} {}", e.problem)),
+        None => InputError::invalid(format!("{flag} {}", e.problem)),
     }
 }
 
 /// Parses the seed's `setpoint_rat_lo_hi` register: two numbers, space or comma separated.
 pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
-    let bad = || InputError(format!("setpoint_rat_lo_hi `{text}` is not two numbers"));
+    let bad = || InputError::invalid(format!("setpoint_rat_lo_hi `{text}` is not two numbers"));
     let values: Vec<f64> = text
         .split(|c: char| c.is_whitespace() || c == ',')
         .filter(|s| !s.is_empty())
@@ -352,7 +352,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             crate::cmd::telega::drive_ports(transport.as_mut(), cfg.node_id, cfg.mtu, node)?;
         let pick = |flag: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
             match (flag, theirs) {
-                (Some(f), Some(t)) if f != t => Err(InputError(format!(
+                (Some(f), Some(t)) if f != t => Err(InputError::invalid(format!(
                     "--{name} {f} but drive {node} has {reg} = {t}; drop the flag or change the register with propid telega"
                 ))),
                 (_, t) => Ok(t),
@@ -377,13 +377,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             registers::TELEGA_READINESS_ID,
         )?;
         cfg.feedback_id = feedback.ok_or_else(|| {
-            InputError(format!(
+            InputError::invalid(format!(
                 "drive {node} has no {} set",
                 registers::TELEGA_FEEDBACK_ID
             ))
         })?;
         cfg.setpoint_id = setpoint.ok_or_else(|| {
-            InputError(format!(
+            InputError::invalid(format!(
                 "drive {node} has no {} set",
                 registers::TELEGA_SETPOINT_ID
             ))

@@ -64,7 +64,7 @@ impl AirArgs {
             (None, Some(t), Some(p)) => Air::from_temperature_pressure(t.si, p.si),
             _ => Ok(default),
         }
-        .map_err(|e| InputError(format!("--density/--temperature/--pressure: {e}")))
+        .map_err(|e| InputError::invalid(format!("--density/--temperature/--pressure: {e}")))
     }
 }
 
@@ -142,7 +142,9 @@ impl Args {
     pub fn options(&self) -> Result<Options, InputError> {
         let air = self.air.air(Air::isa())?;
         if self.pole_pairs == Some(0) {
-            return Err(InputError("--pole-pairs must be at least 1".into()));
+            return Err(InputError::invalid(
+                "--pole-pairs must be at least 1".into(),
+            ));
         }
         let options = Options {
             diameter: self.diameter.si,
@@ -156,9 +158,9 @@ impl Args {
                 Method::Dynamic => MethodChoice::Dynamic,
             },
         };
-        options
-            .check()
-            .map_err(|e| InputError(format!("--diameter/--chord/--reference-speed: {e}")))?;
+        options.check().map_err(|e| {
+            InputError::invalid(format!("--diameter/--chord/--reference-speed: {e}"))
+        })?;
         Ok(options)
     }
 }
@@ -169,7 +171,7 @@ pub fn write_result(p: &Propulsion, path: &Path) -> anyhow::Result<()> {
         Some("yaml" | "yml") => serde_norway::to_string(p)?,
         Some("json") => serde_json::to_string_pretty(p)? + "\n",
         _ => {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "--output {}: the result file must end in .json, .yaml or .yml",
                 path.display()
             ))
@@ -177,7 +179,7 @@ pub fn write_result(p: &Propulsion, path: &Path) -> anyhow::Result<()> {
         }
     };
     std::fs::write(path, text)
-        .map_err(|e| InputError(format!("{}: cannot write: {e}", path.display())))?;
+        .map_err(|e| InputError::invalid(format!("{}: cannot write: {e}", path.display())))?;
     Ok(())
 }
 
@@ -218,7 +220,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     if let Some(out) = &args.output {
         if out == &args.file {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "--output {} is the recording itself: it would be overwritten",
                 out.display()
             ))
@@ -242,7 +244,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.motor && rec.duty.is_none() && report.columns.contains(&"command") {
         eprintln!("note: {name} has a `command` column; if it is the ESC's duty, give --command-is-duty (Kv needs it)");
     }
-    let p = identify(&rec, &options).map_err(|e| InputError(format!("{name}: {e}")))?;
+    let p = identify(&rec, &options).map_err(|e| InputError::invalid(format!("{name}: {e}")))?;
     if let Some(out) = &args.output {
         write_result(&p, out)?;
         eprintln!("result written to {}", out.display());

@@ -7,6 +7,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
+use propid_io::output::Output;
 use propid_io::tsv::{StandColumn, TsvWriter};
 use propid_mechsim::{
     Braking, ConfigError, CurrentLoop, Disturbance, MechConfig, MechStand, ReportNoise, Run,
@@ -303,7 +304,7 @@ impl Args {
 pub fn read_pattern_file(path: &std::path::Path) -> Result<Excitation, InputError> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError(format!("{name}: cannot read: {e}")))?;
+        .map_err(|e| InputError::invalid(format!("{name}: cannot read: {e}")))?;
     propid_science::plan::excitation_from_file(&text, &name)
 }
 
@@ -434,9 +435,11 @@ fn input_error(e: ConfigError) -> InputError {
                 ("sensing.torque.noise", _) => "--current-noise or --load-cell-noise",
                 _ => name,
             };
-            InputError(format!("{name} must be {requirement} (got {value})"))
+            InputError::invalid(format!("{name} must be {requirement} (got {value})"))
         }
-        ConfigError::Inconsistent { fields, why } => InputError(format!("{fields}: {why}")),
+        ConfigError::Inconsistent { fields, why } => {
+            InputError::invalid(format!("{fields}: {why}"))
+        }
     }
 }
 
@@ -448,7 +451,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
         ("--acceleration-lag", stand.acceleration_lag),
     ] {
         if v != 0.0 {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{flag} is a formula-stand effect; with --stand mechanism a lag comes from a mechanism \
                  (--current-loop-bandwidth with --report demand, --current-filter, --observer-hz, \
                  --acceleration-filter, --report load-cell)"
@@ -517,7 +520,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
     };
     c.disturbance = match (stand.disturbance != 0.0, m.bump != 0.0) {
         (true, true) => {
-            return Err(InputError(
+            return Err(InputError::invalid(
                 "--disturbance and --bump cannot be combined (one external torque at a time)"
                     .into(),
             ))
@@ -544,7 +547,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
     Ok(c)
 }
 
-fn run_mechanism(args: &Args, out: Box<dyn Write>) -> anyhow::Result<()> {
+fn run_mechanism(args: &Args, out: Box<dyn Write + '_>) -> anyhow::Result<()> {
     let config = mech_config(&args.stand, &args.mech)?;
     let excitation = args.excitation()?;
     excitation.validate()?;
@@ -587,43 +590,34 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.stand_kind == StandKind::Formula {
         let changed = args.mech.changed();
         if !changed.is_empty() {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{} only apply to --stand mechanism",
                 changed.join(", ")
             ))
             .into());
         }
-    } else {
-        let out: Box<dyn Write> = match &args.output {
-            Some(p) => Box::new(std::io::BufWriter::new(
-                std::fs::File::create(p)
-                    .with_context(|| format!("cannot create {}", p.display()))?,
-            )),
-            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-        };
-        return run_mechanism(&args, out);
+    }
+    // Standard output, or a file written whole (never over the pattern file read).
+    let inputs: Vec<&std::path::Path> = args.pattern_file.iter().map(|p| p.as_path()).collect();
+    let mut out = Output::create(args.output.as_deref(), &inputs)?;
+    let out_name = out.name();
+    let writing = || format!("writing {out_name}");
+    if args.stand_kind != StandKind::Formula {
+        run_mechanism(&args, Box::new(std::io::BufWriter::new(&mut out)))?;
+        return out.finish().with_context(writing);
     }
     let config = args.stand.config()?;
     let excitation = args.excitation()?;
     excitation.validate()?;
-    let out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
-    let out_name = args
-        .output
-        .as_ref()
-        .map_or("standard output".into(), |p| p.display().to_string());
-    let writing = || format!("writing {out_name}");
     let drivetrain = args.instruments.formula()?;
     let columns: &[StandColumn] = if drivetrain.is_some() {
         &StandColumn::ALL
     } else {
         &[]
     };
-    let mut writer = TsvWriter::with_columns(out, false, columns, &[]).with_context(writing)?;
+    let mut writer =
+        TsvWriter::with_columns(std::io::BufWriter::new(&mut out), false, columns, &[])
+            .with_context(writing)?;
     let mut stand = Stand::new(config, args.stand.seed);
     if let Some(d) = drivetrain {
         stand = stand.with_drivetrain(d, args.stand.seed);
@@ -632,6 +626,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .run(&excitation, |row| writer.write(&row))
         .with_context(writing)?;
     writer.into_inner().with_context(writing)?;
+    out.finish().with_context(writing)?;
     eprintln!(
         "simulated {rows} rows ({} s at {} Hz)",
         excitation.duration, config.rate

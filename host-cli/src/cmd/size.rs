@@ -97,7 +97,7 @@ pub struct Args {
 fn read_result(path: &std::path::Path) -> Result<Propulsion, InputError> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError(format!("--propeller {name}: cannot read: {e}")))?;
+        .map_err(|e| InputError::invalid(format!("--propeller {name}: cannot read: {e}")))?;
     let yaml = matches!(
         path.extension().and_then(|e| e.to_str()),
         Some("yaml" | "yml")
@@ -108,7 +108,7 @@ fn read_result(path: &std::path::Path) -> Result<Propulsion, InputError> {
         serde_json::from_str(&text).map_err(|e| e.to_string())
     };
     parsed.map_err(|e| {
-        InputError(format!(
+        InputError::invalid(format!(
             "--propeller {name}: not a `propid propulsion` result ({e}); write one with `propid propulsion LOG --diameter D -o {}`",
             if yaml { "prop.yaml" } else { "prop.json" }
         ))
@@ -135,13 +135,13 @@ impl Args {
                 )
             }
             (None, Some(ct), Some(cq)) => {
-                let d = self.diameter.ok_or_else(|| InputError("--c-t and --c-q need --diameter".into()))?;
+                let d = self.diameter.ok_or_else(|| InputError::invalid("--c-t and --c-q need --diameter".into()))?;
                 if let Some(note) = unit_notes("--diameter", &d, Dimension::Length, 0.02..=3.0) {
                     eprintln!("warning: {note}");
                 }
                 for (flag, c, kind) in [("--c-t", ct, Kind::Thrust), ("--c-q", cq, Kind::Torque)] {
                     if !(c > 0.0 && c.is_finite()) {
-                        return Err(InputError(format!("{flag} must be positive (got {c})")));
+                        return Err(InputError::invalid(format!("{flag} must be positive (got {c})")));
                     }
                     if let Some(why) = propid_science::propulsion::plausibility(kind, c, d.si) {
                         eprintln!("warning: {flag}: {why}");
@@ -167,16 +167,16 @@ impl Args {
                 )
             }
             _ => {
-                return Err(InputError(
+                return Err(InputError::invalid(
                     "give the propeller: --propeller RESULT.json (from `propid propulsion`), or --c-t, --c-q and --diameter".into(),
                 ))
             }
         };
         let identified = Air::with_density(propeller.density, None)
-            .map_err(|e| InputError(format!("--propeller: {e}")))?;
+            .map_err(|e| InputError::invalid(format!("--propeller: {e}")))?;
         let density = self.air.air(identified)?.density;
         if self.rotors == 0 {
-            return Err(InputError("--rotors must be at least 1".into()));
+            return Err(InputError::invalid("--rotors must be at least 1".into()));
         }
         let mut targets: Vec<Target> = Vec::new();
         if let Some(m) = self.hover_mass {
@@ -186,7 +186,7 @@ impl Args {
         targets.extend(self.torque.iter().map(|t| Target::Torque(t.si)));
         targets.extend(self.speed.iter().map(|t| Target::Speed(t.si)));
         if targets.is_empty() {
-            return Err(InputError(
+            return Err(InputError::invalid(
                 "give at least one target: --thrust 6N, --hover-mass 1.5kg, --torque 0.1Nm or --speed 12000rpm".into(),
             ));
         }
@@ -203,7 +203,7 @@ impl Args {
                     .resistance
                     .map(|p| p.si)
                     .or_else(|| from_result(|m| &m.resistance))
-                    .ok_or_else(|| InputError("a motor needs --resistance too (its Kv is known, its resistance is not)".into()))?;
+                    .ok_or_else(|| InputError::invalid("a motor needs --resistance too (its Kv is known, its resistance is not)".into()))?;
                 let i0 = self
                     .no_load_current
                     .map(|p| p.si)
@@ -216,7 +216,7 @@ impl Args {
                 })
             }
             None if self.resistance.is_some() || self.no_load_current.is_some() => {
-                return Err(InputError(
+                return Err(InputError::invalid(
                     "--resistance and --no-load-current describe a motor: give its --kv too".into(),
                 ))
             }
@@ -241,7 +241,7 @@ impl Args {
             battery,
             targets,
         };
-        propid_science::propulsion::size::check(&q).map_err(InputError)?;
+        propid_science::propulsion::size::check(&q).map_err(InputError::invalid)?;
         Ok(q)
     }
 }
@@ -249,7 +249,7 @@ impl Args {
 /// Runs `propid size`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let q = args.question()?;
-    let answer = size(&q).map_err(InputError)?;
+    let answer = size(&q).map_err(InputError::invalid)?;
     let text = match args.format {
         Format::Text => size_text(&answer),
         Format::Json => serde_json::to_string_pretty(&answer)? + "\n",

@@ -68,7 +68,7 @@ fn at_least(flag: &str, v: f64, min: f64) -> Result<(), InputError> {
     if v >= min && v.is_finite() {
         Ok(())
     } else {
-        Err(InputError(format!(
+        Err(InputError::invalid(format!(
             "{flag} must be ≥ {min} and finite (got {v})"
         )))
     }
@@ -83,7 +83,7 @@ impl InstrumentArgs {
     fn check(&self) -> Result<(), InputError> {
         at_least("--thrust-k", self.thrust_k, 0.0)?;
         if !(1.0..=4.0).contains(&self.thrust_exponent) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "--thrust-exponent must be in [1, 4] (got {})",
                 self.thrust_exponent
             )));
@@ -101,7 +101,7 @@ impl InstrumentArgs {
         at_least("--noise-bus-current", self.noise_bus_current, 0.0)?;
         if let Some(v) = self.bus_voltage {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "--bus-voltage must be positive (got {v})"
                 )));
             }
@@ -116,7 +116,7 @@ impl InstrumentArgs {
             return Ok(None);
         }
         if self.bus_voltage.is_some() != (self.kv > 0.0) {
-            return Err(InputError(
+            return Err(InputError::invalid(
                 "the formula stand's electrical columns need both --kv and --bus-voltage".into(),
             ));
         }
@@ -142,7 +142,7 @@ impl InstrumentArgs {
     pub fn mechanism(&self, c: &mut MechConfig) -> Result<(), InputError> {
         self.check()?;
         if self.kv != 0.0 || self.no_load_current != 0.0 {
-            return Err(InputError(
+            return Err(InputError::invalid(
                 "--kv and --no-load-current are the formula stand's: with --stand mechanism the motor is --motor-kt, --motor-resistance, and its friction --coulomb and --c1".into(),
             ));
         }

@@ -63,7 +63,7 @@ fn write(
         .access(drive, name, Value::Empty)
         .map_err(client_err)?
         .filter(|r| !r.value.is_empty())
-        .ok_or_else(|| InputError(format!("drive {drive} has no register {name}")))?;
+        .ok_or_else(|| InputError::invalid(format!("drive {drive} has no register {name}")))?;
     if !current.mutable {
         bail!("drive {drive}: {name} is read-only");
     }
@@ -166,11 +166,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     for a in &args.set {
         let (n, v) = a
             .split_once('=')
-            .ok_or_else(|| InputError(format!("--set `{a}`: expected NAME=VALUE")))?;
+            .ok_or_else(|| InputError::invalid(format!("--set `{a}`: expected NAME=VALUE")))?;
         assignments.push((n.trim().to_string(), v.trim().to_string()));
     }
     if !(args.listen > 0.0 && args.listen <= 60.0) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "--listen must be a number of seconds in (0, 60] (got {})",
             args.listen
         ))

@@ -3,8 +3,10 @@
 use std::path::Path;
 
 use super::{
-    column, csv_reader, differentiate, find_column, mean_sd, number, open_csv, Imported, UpdateRate,
+    column, csv_error, csv_reader, describe_dropped, despike, differentiate, duplicates_warning,
+    find_column, mean_sd, number, open_csv, DropReason, Dropped, Imported, UpdateRate,
 };
+use crate::input::LineLimit;
 use crate::tsv::{Row, Sample, Stand, StandColumn};
 use crate::InputError;
 
@@ -35,9 +37,15 @@ fn pc_time(text: &str) -> Option<f64> {
 
 /// Imports an ESC32 log. `kv` [rpm/V] gives Kt = 60/(2π·kv); it must be finite and positive.
 pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
+    import_autoquad_with(path, kv, false)
+}
+
+/// [`import_autoquad`], with velocity glitches set to NaN when `despike` (they are found and
+/// reported either way).
+pub fn import_autoquad_with(path: &Path, kv: f64, despike: bool) -> Result<Imported, InputError> {
     check_kv(kv)?;
     let (reader, headers, file) = open_csv(path)?;
-    autoquad(reader, headers, file, kv)
+    autoquad(reader, headers, file, kv, despike)
 }
 
 /// [`import_autoquad`] from any reader; `name` names it in messages.
@@ -48,12 +56,12 @@ pub fn read_autoquad(
 ) -> Result<Imported, InputError> {
     check_kv(kv)?;
     let (reader, headers, file) = csv_reader(Box::new(input), name.to_owned())?;
-    autoquad(reader, headers, file, kv)
+    autoquad(reader, headers, file, kv, false)
 }
 
 fn check_kv(kv: f64) -> Result<(), InputError> {
     if !kv.is_finite() || kv <= 0.0 {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "kv must be a finite positive number of rpm/V (got {kv})"
         )));
     }
@@ -61,10 +69,11 @@ fn check_kv(kv: f64) -> Result<(), InputError> {
 }
 
 fn autoquad(
-    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    mut reader: csv::Reader<LineLimit<Box<dyn std::io::Read + '_>>>,
     headers: csv::StringRecord,
     file: String,
     kv: f64,
+    remove_spikes: bool,
 ) -> Result<Imported, InputError> {
     let (stamp, _) = column(&headers, &["Timestamp"], &file)?;
     let (amps, amps_name) = column(&headers, &["Amps"], &file)?;
@@ -74,14 +83,31 @@ fn autoquad(
     let kt = 60.0 / (std::f64::consts::TAU * kv);
     // (PC time, bus current, rpm, duty in %, bus voltage)
     let mut raw: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+    // The log's line of each row, and the lines dropped as copies of the line before them (the
+    // time is the row index, so a copy would also shift every later row's time).
+    let mut lines = Vec::new();
+    let mut dropped = Vec::new();
+    let mut previous = csv::StringRecord::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
-        let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
+        let record = record.map_err(|e| csv_error(&file, &e, line))?;
+        if k > 0 && record.iter().eq(previous.iter()) {
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::Duplicate,
+            });
+            continue;
+        }
+        lines.push(line);
         let text = record.get(stamp).unwrap_or("");
         let pc = pc_time(text).ok_or_else(|| {
-            InputError(format!(
-                "{file}: line {line}, column `Timestamp`: `{text}` is not YYYY-MM-DD HH:MM:SS:mmm"
+            InputError::invalid(format!(
+                "`{}` is not YYYY-MM-DD HH:MM:SS:mmm",
+                text.chars().take(40).collect::<String>()
             ))
+            .in_file(&file)
+            .at_line(line)
+            .in_column("Timestamp")
         })?;
         raw.push((
             pc,
@@ -93,12 +119,13 @@ fn autoquad(
                 None => f64::NAN,
             },
         ));
+        previous = record;
     }
     let n = raw.len();
     if n < 2 {
-        return Err(InputError(format!(
-            "{file}: {n} data rows; at least 2 are needed"
-        )));
+        return Err(
+            InputError::invalid(format!("{n} data rows; at least 2 are needed")).in_file(&file),
+        );
     }
     // The time base: the ESC logs at a fixed rate while the PC stamps rows in bursts, so the
     // row interval is the least-squares slope of PC time against row index.
@@ -113,9 +140,11 @@ fn autoquad(
     }
     let dt = sxy / sxx;
     if !(1e-5..=1.0).contains(&dt) {
-        return Err(InputError(format!(
-            "{file}: column `Timestamp`: the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
-        )));
+        return Err(InputError::invalid(format!(
+            "the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
+        ))
+        .in_file(&file)
+        .in_column("Timestamp"));
     }
     let scatter = raw
         .iter()
@@ -145,6 +174,11 @@ fn autoquad(
             },
         });
     }
+    let mut warnings = Vec::new();
+    if !dropped.is_empty() {
+        warnings.push(duplicates_warning(dropped.len(), n + dropped.len()));
+    }
+    despike(&mut rows, &lines, &rpm_name, remove_spikes, &mut warnings);
     differentiate(&mut rows);
 
     // What the signals do, measured.
@@ -226,10 +260,13 @@ fn autoquad(
         }
         None => assumptions.push("voltage: no `Batt. Volts` column; no voltage column".into()),
     }
+    assumptions.extend(describe_dropped(&dropped, n + dropped.len()));
     Ok(Imported {
         rows,
         stand_columns,
         extra: Vec::new(),
         assumptions,
+        dropped,
+        warnings,
     })
 }

@@ -3,9 +3,11 @@
 use std::path::Path;
 
 use super::{
-    column, csv_reader, differentiate, find_column, loose, mean_sd, number, open_csv, ExtraColumn,
-    Imported, UpdateRate,
+    column, csv_error, csv_reader, describe_dropped, despike, differentiate, duplicates_warning,
+    find_column, increasing_rows, loose, mean_sd, number, open_csv, DropReason, Dropped,
+    ExtraColumn, Imported, UpdateRate,
 };
+use crate::input::LineLimit;
 use crate::tsv::{Row, Sample, StandColumn};
 use crate::InputError;
 
@@ -16,6 +18,9 @@ pub struct RcbenchOptions {
     /// from every torque (and thrust) sample. Off by default: the offsets are measured and
     /// reported, never removed silently.
     pub subtract_zero_offset: bool,
+    /// Set the velocity of the samples found to be glitches (a jump away and straight back) to
+    /// NaN. Off by default: glitches are found and reported, never removed silently.
+    pub despike: bool,
 }
 
 /// Column names seen in RCbenchmark and Tyto exports, compared loosely (case, `µ`/`u`,
@@ -81,10 +86,13 @@ fn thrust_column(
         .map(|u| u.trim_start_matches('(').trim_end_matches(')').to_owned())
         .unwrap_or_default();
     let Some(&(_, scale)) = THRUST_UNITS.iter().find(|(u, _)| *u == unit) else {
-        return Err(InputError(format!(
-            "{file}: line 1, column `{name}`: the thrust's unit {} is not one propid converts (gf, kgf, N, lbf, ozf); rename the column to say its unit, e.g. `Thrust (gf)`",
+        return Err(InputError::invalid(format!(
+            "the thrust's unit {} is not one propid converts (gf, kgf, N, lbf, ozf); rename the column to say its unit, e.g. `Thrust (gf)`",
             if unit.is_empty() { "is not given".to_string() } else { format!("`{unit}`") }
-        )));
+        ))
+        .in_file(file)
+        .at_line(1)
+        .in_column(name));
     };
     Ok(Some(KeptColumn {
         to: Kept::Stand(StandColumn::Thrust),
@@ -250,7 +258,7 @@ pub fn read_rcbench(
 }
 
 fn rcbench(
-    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    mut reader: csv::Reader<LineLimit<Box<dyn std::io::Read + '_>>>,
     headers: csv::StringRecord,
     file: String,
     options: &RcbenchOptions,
@@ -283,11 +291,20 @@ fn rcbench(
         speeds: Vec<f64>,
         kept: Vec<f64>,
     }
-    let mut raw: Vec<Raw> = Vec::new();
-    let mut dropped_lines = Vec::new();
+    // Every row is read; then only the bad ones are dropped, each for itself.
+    let mut read: Vec<(u64, Raw)> = Vec::new();
+    let mut dropped: Vec<Dropped> = Vec::new();
+    let mut previous = csv::StringRecord::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
-        let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
+        let record = record.map_err(|e| csv_error(&file, &e, line))?;
+        if k > 0 && record.iter().eq(previous.iter()) {
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::Duplicate,
+            });
+            continue;
+        }
         let t = number(&record, time, &time_name, &file, line)? * time_scale;
         let q = number(&record, torque, &torque_name, &file, line)?;
         let speeds = speeds
@@ -298,24 +315,46 @@ fn rcbench(
             .iter()
             .map(|c| Ok((number(&record, c.index, &c.name, &file, line)? - c.offset) * c.scale))
             .collect::<Result<Vec<f64>, InputError>>()?;
+        previous = record;
         if !t.is_finite() {
-            return Err(InputError(format!(
-                "{file}: line {line}, column `{time_name}`: no time"
-            )));
-        }
-        // Time must increase strictly, as the TSV promises: a row repeating an earlier time
-        // is dropped and counted.
-        if raw.last().is_some_and(|p| t <= p.t) {
-            dropped_lines.push(line);
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::NoTime,
+            });
             continue;
         }
-        raw.push(Raw { t, q, speeds, kept });
+        read.push((line, Raw { t, q, speeds, kept }));
     }
+    let rows_in_log = read.len() + dropped.len();
+    let duplicates = dropped
+        .iter()
+        .filter(|d| d.reason == DropReason::Duplicate)
+        .count();
+    // Time must increase strictly, as the TSV promises: the fewest rows are dropped that make
+    // it so (a stale time costs its own row, not the rows until the clock passes it).
+    let times: Vec<f64> = read.iter().map(|(_, r)| r.t).collect();
+    // Of equally few, the rows dropped are those without a load-cell sample.
+    let thrust = kept
+        .iter()
+        .position(|c| c.to == Kept::Stand(StandColumn::Thrust));
+    let precious: Vec<bool> = read
+        .iter()
+        .map(|(_, r)| r.q.is_finite() || thrust.is_some_and(|k| r.kept[k].is_finite()))
+        .collect();
+    let (keep, out_of_order) = increasing_rows(&times, &precious);
+    dropped.extend(out_of_order.iter().map(|&(i, reason)| Dropped {
+        line: read[i].0,
+        reason,
+    }));
+    dropped.sort_by_key(|d| d.line);
+    let mut read: Vec<Option<(u64, Raw)>> = read.into_iter().map(Some).collect();
+    let (lines, raw): (Vec<u64>, Vec<Raw>) = keep.iter().filter_map(|&i| read[i].take()).unzip();
     if raw.len() < 2 {
-        return Err(InputError(format!(
-            "{file}: {} data rows with increasing time; at least 2 are needed",
+        return Err(InputError::invalid(format!(
+            "{} data rows with increasing time; at least 2 are needed",
             raw.len()
-        )));
+        ))
+        .in_file(&file));
     }
     let n = raw.len();
     let mut assumptions = Vec::new();
@@ -324,10 +363,12 @@ fn rcbench(
     let mut dts: Vec<f64> = raw.windows(2).map(|w| w[1].t - w[0].t).collect();
     let dt = super::median(&mut dts).unwrap_or(f64::NAN);
     if !(1e-5..=1.0).contains(&dt) {
-        return Err(InputError(format!(
-            "{file}: column `{time_name}`: the median interval between rows is {dt} {}; a stand logs every 10 µs to 1 s — is the unit right?",
+        return Err(InputError::invalid(format!(
+            "the median interval between rows is {dt} {}; a stand logs every 10 µs to 1 s — is the unit right?",
             if time_scale == 1.0 { "s" } else { "s (after ms → s)" }
-        )));
+        ))
+        .in_file(&file)
+        .in_column(&time_name));
     }
     assumptions.push(format!(
         "time = `{time_name}`{}: {n} rows over {:.1} s, median row interval {:.2} ms ({:.1} rows/s)",
@@ -336,18 +377,10 @@ fn rcbench(
         dt * 1e3,
         1.0 / dt
     ));
-    if !dropped_lines.is_empty() {
-        assumptions.push(format!(
-            "{} rows whose time does not increase were dropped (lines {}{})",
-            dropped_lines.len(),
-            dropped_lines
-                .iter()
-                .take(5)
-                .map(u64::to_string)
-                .collect::<Vec<_>>()
-                .join(", "),
-            if dropped_lines.len() > 5 { ", …" } else { "" }
-        ));
+    assumptions.extend(describe_dropped(&dropped, rows_in_log));
+    let mut warnings = Vec::new();
+    if duplicates > 0 {
+        warnings.push(duplicates_warning(duplicates, rows_in_log));
     }
 
     // The speed: the first of optical, electrical, generic that logged a non-zero value.
@@ -356,14 +389,15 @@ fn rcbench(
             .any(|r| r.speeds[s].is_finite() && r.speeds[s] != 0.0)
     });
     let Some(chosen) = chosen else {
-        return Err(InputError(format!(
-            "{file}: no speed column has a non-zero value ({})",
+        return Err(InputError::invalid(format!(
+            "no speed column has a non-zero value ({})",
             speeds
                 .iter()
                 .map(|s| format!("`{}`", s.1))
                 .collect::<Vec<_>>()
                 .join(", ")
-        )));
+        ))
+        .in_file(&file));
     };
     let speed_name = &speeds[chosen].1;
     let others: Vec<String> = speeds
@@ -417,15 +451,22 @@ fn rcbench(
             row
         })
         .collect();
+    despike(
+        &mut rows,
+        &lines,
+        speed_name,
+        options.despike,
+        &mut warnings,
+    );
     differentiate(&mut rows);
     let top = top_speed(&rows);
 
     // The torque: how often it updates, its zero at rest, its sign at speed.
     let rate = UpdateRate::measure(rows.iter().map(|r| (r.sample.t, r.sample.force)));
     if rate.present == 0 {
-        return Err(InputError(format!(
-            "{file}: column `{torque_name}` is empty in every row"
-        )));
+        return Err(InputError::invalid("empty in every row".into())
+            .in_file(&file)
+            .in_column(&torque_name));
     }
     let cell = LoadCell::measure(&rows, |r| r.sample.force);
     let sign = cell.sign();
@@ -515,6 +556,8 @@ fn rcbench(
         stand_columns,
         extra,
         assumptions,
+        dropped,
+        warnings,
     })
 }
 

@@ -135,6 +135,8 @@ pub(super) struct Chunk {
     pub run: Run,
     /// Rows in `run`.
     pub run_rows: u64,
+    /// Runs of complete rows begun in the chunk.
+    pub runs: u64,
     /// Local index of the run's first row.
     pub run_first_row: u64,
     /// The run starts at the chunk's first row.
@@ -145,6 +147,9 @@ pub(super) struct Chunk {
     pub breaker: Option<(u64, &'static str)>,
     /// The chunk's last incomplete row: (local line, column).
     pub last_incomplete: Option<(u64, &'static str)>,
+    /// Rows identical, byte for byte, to the row before them (a log written twice), and the
+    /// local line of the first.
+    pub copies: (u64, Option<u64>),
 }
 
 /// The first of t, force, velocity, acceleration that is not finite, if any.
@@ -155,11 +160,11 @@ pub(super) fn incomplete(v: &Values) -> Option<&'static str> {
 
 /// Calls `f(local line, line bytes, offset)` for each line of `data[start..end]` (without its
 /// `\n`), stopping early when `f` returns false.
-pub(super) fn lines(
-    data: &[u8],
+pub(super) fn lines<'a>(
+    data: &'a [u8],
     start: usize,
     end: usize,
-    mut f: impl FnMut(u64, &[u8], usize) -> bool,
+    mut f: impl FnMut(u64, &'a [u8], usize) -> bool,
 ) {
     let mut pos = start;
     let mut line = 0u64;
@@ -213,6 +218,7 @@ pub(super) fn scan(
     let mut in_run = false;
     let mut error = None;
     let mut released = start;
+    let mut previous: &[u8] = &[];
     lines(data, start, end, |line, bytes, offset| {
         c.lines = line;
         if offset - released >= RELEASE_BYTES {
@@ -231,6 +237,11 @@ pub(super) fn scan(
         };
         let row = c.rows;
         c.rows += 1;
+        if bytes == previous {
+            c.copies.0 += 1;
+            c.copies.1.get_or_insert(line);
+        }
+        previous = bytes;
         if let Some(column) = incomplete(&v) {
             in_run = false;
             c.last_incomplete = Some((line, column));
@@ -239,6 +250,7 @@ pub(super) fn scan(
         c.complete += 1;
         if !in_run {
             in_run = true;
+            c.runs += 1;
             c.run.clear();
             c.run_rows = 0;
             c.run_first_row = row;

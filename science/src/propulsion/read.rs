@@ -11,7 +11,8 @@
 use std::io::BufRead;
 use std::path::Path;
 
-use propid_io::tsv::{StandColumn, TsvError, TsvReader};
+use propid_io::tsv::{StandColumn, TsvReader};
+use propid_io::InputError;
 
 use super::Recording;
 
@@ -42,7 +43,7 @@ pub fn read(
     input: impl BufRead,
     name: &str,
     options: &ReadOptions,
-) -> Result<(Recording, ReadReport), TsvError> {
+) -> Result<(Recording, ReadReport), InputError> {
     let mut reader = TsvReader::new(input, name)?;
     let has = |c: StandColumn| reader.has(c);
     let mut rec = Recording::default();
@@ -98,15 +99,15 @@ pub fn read(
 }
 
 /// [`read`] from a path (`-`: standard input).
-pub fn read_path(path: &Path, options: &ReadOptions) -> Result<(Recording, ReadReport), TsvError> {
+pub fn read_path(
+    path: &Path,
+    options: &ReadOptions,
+) -> Result<(Recording, ReadReport), InputError> {
     let name = path.display().to_string();
     if path == Path::new("-") {
         return read(std::io::stdin().lock(), "<stdin>", options);
     }
-    let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
-        source_name: name.clone(),
-        line: 0,
-        source: e,
-    })?;
+    let f =
+        std::fs::File::open(path).map_err(|e| InputError::os(name.clone(), "cannot open", &e))?;
     read(std::io::BufReader::new(f), &name, options)
 }

@@ -163,7 +163,9 @@ impl DrivetrainConfig {
         ];
         for (name, v, ok) in checks {
             if !(ok && v.is_finite()) {
-                return Err(InputError(format!("{name} is out of range (got {v})")));
+                return Err(InputError::invalid(format!(
+                    "{name} is out of range (got {v})"
+                )));
             }
         }
         Ok(())
