@@ -65,8 +65,8 @@ pub mod stand;
 
 pub use config::{
     Bearing, Braking, Bus, Cogging, ConfigError, CurrentLoop, DeviceClock, Disturbance, Drag,
-    Drive, Instruments, Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run, Sensing,
-    Thrust, ThrustCell, TorqueReport, VelocityEstimator,
+    Drive, Field, Instruments, Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run,
+    Sensing, Thrust, ThrustCell, TorqueReport, VelocityEstimator,
 };
 pub use record::{write_tsv, Energy, Record, Truth, TsvSink, STAND_HEADER, TSV_HEADER};
 pub use stand::{simulate, MechStand};
