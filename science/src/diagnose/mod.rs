@@ -81,7 +81,7 @@ pub enum Stage {
 pub type Observer<'a> = &'a (dyn Fn(Stage) + Sync);
 use signals::Signals;
 
-use propid_io::tsv::{Row, Sample, TsvError, TsvReader};
+use propid_io::tsv::{Row, Sample};
 use propid_io::InputError;
 
 /// Folds of the blocked cross-validation every model is scored by.
@@ -262,7 +262,7 @@ fn diagnose_complete(
                     extent.duration_s,
                     vec![CannotJudge::NoExcitation { condition_number }],
                 );
-                r.notes.push(dynamics.0);
+                r.notes.push(dynamics.to_string());
                 r
             }
         },
@@ -341,33 +341,14 @@ pub(crate) fn rms(x: &[f64]) -> f64 {
 }
 
 /// Reads every complete row of a TSV with its host time (see [`read_samples`]).
-pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), TsvError> {
-    let name = path.display().to_string();
-    let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
-            source_name: name.clone(),
-            line: 0,
-            source: e,
-        })?;
-        Box::new(std::io::BufReader::new(f))
-    };
-    let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;
-    let (mut out, mut skipped) = (Vec::new(), 0);
-    while let Some(row) = reader.next_row()? {
-        if row.sample.is_finite() {
-            out.push(row);
-        } else {
-            skipped += 1;
-        }
-    }
-    Ok((out, skipped))
+pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), InputError> {
+    let table = propid_io::tsv::read_rows(path, |row| row.sample.is_finite())?;
+    Ok((table.rows, table.skipped))
 }
 
 /// Reads every complete row of a TSV (rows with a non-finite t, force, velocity or acceleration
 /// are skipped and counted).
-pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), TsvError> {
+pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), InputError> {
     let (rows, skipped) = read_rows(path)?;
     Ok((rows.into_iter().map(|r| r.sample).collect(), skipped))
 }

@@ -208,7 +208,7 @@ pub(crate) fn report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     r.notes = vec![format!(
         "steady-state data: the dynamics cannot be fitted ({}); the drag law is diagnosed from {} torque samples instead, \
          and simulation_rms holds the torque residual [N·m] of the seed's law (F = c2·ω² + F₀) and of F = k·|ω|^p + F₀",
-        why.0, law.samples
+        why, law.samples
     )];
     r.simulation_rms = SimulationRms {
         base: law.rms_seed,
