@@ -157,7 +157,7 @@ fn garbage_cannot_be_judged_exit_3() {
         (
             "milliseconds",
             |r| r.iter_mut().for_each(|x| x[1] *= 1000.0),
-            "is the time column in seconds",
+            "the time column looks like it is in ms, not seconds",
         ),
         (
             "short",

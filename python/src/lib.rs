@@ -91,6 +91,7 @@ impl From<Bounds> for FitOptions {
             c2_max: b.c2_max.unwrap_or(d.c2_max),
             diameter: b.diameter,
             density: b.density.unwrap_or(d.density),
+            reading: d.reading,
         }
     }
 }
@@ -145,7 +146,15 @@ fn diagnose_named(
     max_effects: usize,
     name: &str,
 ) -> PyResult<(String, String, Option<String>)> {
-    let report = py.detach(|| diagnose_rows(rows, DiagnoseOptions { max_effects }));
+    let report = py.detach(|| {
+        diagnose_rows(
+            rows,
+            DiagnoseOptions {
+                max_effects,
+                ..DiagnoseOptions::default()
+            },
+        )
+    });
     let mut report = report.map_err(|e| InputError::new_err(format!("{name}: {e}")))?;
     if skipped > 0 {
         report

@@ -33,6 +33,7 @@ use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvReader, Values, ALL_SL
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
+use crate::plausibility::{self, Reading};
 
 /// What a fit is asked to do (checked once by [`FitOptions::check`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -50,6 +51,8 @@ pub struct FitOptions {
     pub diameter: Option<f64>,
     /// Air density [kg/m³] for C_Q.
     pub density: f64,
+    /// How the columns are read (a reversed torque sign, a velocity in rpm).
+    pub reading: Reading,
 }
 
 impl Default for FitOptions {
@@ -62,6 +65,7 @@ impl Default for FitOptions {
             c2_max: 1e2,
             diameter: None,
             density: 1.225,
+            reading: Reading::default(),
         }
     }
 }
@@ -132,6 +136,10 @@ pub struct FitReport {
     pub condition_number: f64,
     /// Parameters sitting on a bound.
     pub at_bound: Vec<&'static str>,
+    /// Free parameters the data do not identify (on a bound, or a standard error above 30 % of
+    /// the value): their values are not measurements. A parameter on a bound has the standard
+    /// error of the fit without bounds, never the 0 of an active bound.
+    pub not_identified: Vec<&'static str>,
     /// Torque coefficient, when a diameter was given.
     pub c_q: Option<f64>,
     /// Warnings about the data (also printed on stderr).
@@ -486,14 +494,28 @@ fn fit_bytes(
             return Err(overflow_error(name, line, &s).into());
         }
     }
-    let report = notes(report_of(&estimator, options, window, name)?);
+    // The plausibility gate's stretch of rows: the window's first GATE_ROWS, in order.
+    let mut gate = Vec::new();
+    let (offset, _, skip) = start;
+    walk(
+        data,
+        offset,
+        skip,
+        n.min(GATE_ROWS),
+        &layout,
+        ALL_SLOTS,
+        |_, v| gate.push(row_of(v).sample),
+    );
+    let report = notes(report_of(&estimator, options, window, name, &gate)?);
     let mut kept = Vec::new();
     if want_samples {
         let keep_every = (n / 4000).max(1);
         let mut i = 0u64;
         window_rows(ALL_SLOTS, &mut |_, v| {
             if i % keep_every == 0 {
-                kept.push(row_of(v).sample);
+                let mut sample = row_of(v).sample;
+                options.reading.apply(&mut sample);
+                kept.push(sample);
             }
             i += 1;
         });
@@ -548,7 +570,9 @@ fn fit_sparse(
             overflow = Some((line + 1, row_of(&v).sample));
         }
         if want_samples && (complete - 1 - first) % keep_every == 0 {
-            kept.push(row_of(&v).sample);
+            let mut sample = row_of(&v).sample;
+            options.reading.apply(&mut sample);
+            kept.push(sample);
         }
         true
     });
@@ -563,7 +587,9 @@ fn fit_sparse(
         run_start: first_row,
         breaker: None,
     };
-    let mut report = report_of(&estimator, options, window, name)?;
+    // Rows one or two at a time are no stretch to integrate the acceleration over: only the
+    // torque sign is checked.
+    let mut report = report_of(&estimator, options, window, name, &[])?;
     report.warnings.insert(
         0,
         format!(
@@ -628,12 +654,28 @@ fn overflow_error(name: &str, line: u64, s: &Sample) -> InputError {
 /// any printed estimate would be an artefact of the arithmetic.
 const UNIDENTIFIABLE_CONDITION: f64 = 1e15;
 
+/// Rows of the window the plausibility gate integrates the acceleration over (the first ones):
+/// enough for any unit mistake, cheap beside a multi-million-row fit.
+const GATE_ROWS: u64 = 100_000;
+
+/// The report of the fitted sums. `gate` is a stretch of the window's rows (as in the file) for
+/// the plausibility checks; the rows and sums are read as `args.reading` says first.
 fn report_of(
     estimator: &LoadEstimator<f64>,
     args: &FitOptions,
     window: Window,
     name: &str,
+    gate: &[Sample],
 ) -> Result<FitReport, InputError> {
+    let estimator = &args.reading.apply_to_estimator(estimator);
+    let gate: Vec<Sample> = gate
+        .iter()
+        .map(|s| {
+            let mut s = *s;
+            args.reading.apply(&mut s);
+            s
+        })
+        .collect();
     let n = estimator.count() as u64;
     if n < 10 {
         return Err(InputError::cannot_judge(format!(
@@ -654,6 +696,17 @@ fn report_of(
         c1_max: unbounded(args.c1_max),
         c2_max: unbounded(args.c2_max),
     };
+    let implausible = plausibility::check(&gate, estimator);
+    if !implausible.is_empty() {
+        let why: Vec<String> = implausible.iter().map(|w| w.to_string()).collect();
+        return Err(InputError::cannot_judge(format!(
+            "no fit is given for these rows ({}..={}): {}",
+            window.first + 1,
+            window.last + 1,
+            why.join("; ")
+        ))
+        .in_file(name));
+    }
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
         SolveError::NoExcitation { regressor } => InputError::cannot_judge(format!(
@@ -705,7 +758,7 @@ fn report_of(
     }
     if est.at_bound[0] {
         warnings.push(format!(
-            "the mass sits on its bound ({:e}): these data do not identify it, and its standard error of 0 is not a precision (steady plateaus, or a force too slow for the dynamics: `propid diagnose` fits the steady-state drag law then)",
+            "the mass sits on its bound ({:e}): these data do not identify it (steady plateaus, or a force too slow for the dynamics: `propid diagnose` fits the steady-state drag law then)",
             est.mass
         ));
     }
@@ -715,6 +768,43 @@ fn report_of(
         .filter(|(_, b)| *b)
         .map(|(n, _)| *n)
         .collect();
+    // A parameter on a bound has the standard error of the fit without bounds (the precision
+    // the data give it), never the 0 of the active bound; c1 under `c1_max = 0` is not a free
+    // parameter (the seed's model has none) and keeps its 0.
+    let free = estimator.estimate_unbounded().ok();
+    let mut stderr = [est.mass_stderr, est.c1_stderr, est.c2_stderr];
+    let values = [est.mass, est.c1, est.c2];
+    let bounds = [
+        if est.mass <= args.mass_min * (1.0 + 1e-9) {
+            args.mass_min
+        } else {
+            args.mass_max
+        },
+        if est.c1 == 0.0 { 0.0 } else { args.c1_max },
+        if est.c2 == 0.0 { 0.0 } else { args.c2_max },
+    ];
+    let mut not_identified = Vec::new();
+    for (k, name) in ["mass", "c1", "c2"].into_iter().enumerate() {
+        if k == 1 && args.c1_max == 0.0 {
+            continue;
+        }
+        if est.at_bound[k] {
+            stderr[k] = free.map_or(f64::INFINITY, |f| {
+                [f.mass_stderr, f.c1_stderr, f.c2_stderr][k]
+            });
+            if !(stderr[k] > 0.0 && stderr[k].is_finite()) {
+                stderr[k] = f64::INFINITY;
+            }
+        }
+        let bound = est.at_bound[k].then_some(bounds[k]);
+        if let Some(why) = plausibility::identified(values[k], stderr[k], bound) {
+            if k != 0 || !est.at_bound[0] {
+                warnings.push(why.describe(name, values[k]));
+            }
+            not_identified.push(name);
+        }
+    }
+    let [mass_stderr, c1_stderr, c2_stderr] = stderr;
     let c_q = args
         .diameter
         .map(|d| 4.0 * std::f64::consts::PI.powi(2) * est.c2 / (args.density * d.powi(5)));
@@ -722,14 +812,15 @@ fn report_of(
         mass: est.mass,
         c1: est.c1,
         c2: est.c2,
-        mass_stderr: est.mass_stderr,
-        c1_stderr: est.c1_stderr,
-        c2_stderr: est.c2_stderr,
+        mass_stderr,
+        c1_stderr,
+        c2_stderr,
         rms: est.rms,
         samples: n,
         rows: window.rows,
         condition_number: est.condition_number,
         at_bound,
+        not_identified,
         c_q,
         warnings,
     })
@@ -776,6 +867,7 @@ pub fn to_yaml(r: &FitReport) -> String {
     s += &format!("samples: {}\n", r.samples);
     s += &format!("condition_number: {}\n", f(r.condition_number, 3));
     s += &format!("at_bound: [{}]\n", r.at_bound.join(", "));
+    s += &format!("not_identified: [{}]\n", r.not_identified.join(", "));
     if let Some(cq) = r.c_q {
         s += &format!("c_q: {} # propeller torque coefficient\n", f(cq, 6));
     }

@@ -29,6 +29,7 @@ pub mod excitation;
 pub mod figure;
 pub mod fit;
 pub mod plan;
+pub mod plausibility;
 pub mod propulsion;
 pub mod stand;
 

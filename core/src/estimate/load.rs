@@ -104,6 +104,13 @@ impl<T: RealField + Copy> LoadEstimator<T> {
         self.equations.merge(&other.equations);
     }
 
+    /// The estimator of the same samples with torque, ω and ω|ω| multiplied by `s`
+    /// ([`NormalEquations::scale_regressors`]): a flipped torque sign is `[-1, 1, 1]`, a
+    /// velocity logged in rpm `[1, k, k²]` with k = 2π/60.
+    pub fn scale_regressors(&mut self, s: &[T; 3]) {
+        self.equations.scale_regressors(s);
+    }
+
     /// The underlying normal equations.
     pub fn equations(&self) -> &NormalEquations<T, 3> {
         &self.equations

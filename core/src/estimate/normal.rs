@@ -593,6 +593,19 @@ impl<T: RealField + Copy, const N: usize> NormalEquations<T, N> {
         }
     }
 
+    /// The equations of the same samples with regressor i multiplied by `s[i]` (a column read
+    /// in another unit or with the opposite sign): ΦᵀΦ becomes S·ΦᵀΦ·S and Φᵀy becomes S·Φᵀy,
+    /// exactly, with no sample read again.
+    pub fn scale_regressors(&mut self, s: &[T; N]) {
+        *self = self.folded();
+        for i in 0..N {
+            for j in i..N {
+                self.phi_phi[i][j].scale(s[i] * s[j]);
+            }
+            self.phi_y[i].scale(s[i]);
+        }
+    }
+
     /// Effective number of samples.
     pub fn count(&self) -> T {
         self.sums().n

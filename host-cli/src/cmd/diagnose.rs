@@ -34,9 +34,21 @@ pub struct Args {
     /// Write plots (measured vs simulated velocity before and after, residuals): .svg, .png, .html.
     #[arg(long)]
     pub plot: Option<PathBuf>,
-    /// Largest number of effects to name.
-    #[arg(long, default_value_t = 3)]
+    /// Largest number of effects to name (at least 1; the seed's model alone is `propid fit`).
+    #[arg(long, default_value_t = 3, value_parser = at_least_one)]
     pub max_effects: usize,
+    /// How the columns are read.
+    #[command(flatten)]
+    pub reading: super::ReadingArgs,
+}
+
+/// `--max-effects`: a count of at least one.
+fn at_least_one(text: &str) -> Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("0 tries no effect, so nothing could be concluded about the seed's model: give 1 or more (the seed's model alone is `propid fit`)".into()),
+        Ok(n) => Ok(n),
+        Err(_) => Err(format!("`{text}` is not a whole number of effects (1 or more)")),
+    }
 }
 
 /// Lets glibc give every large buffer back to the system when it is freed. By default glibc
@@ -77,7 +89,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Stage::Extended => "extended model".to_string(),
         })
     };
-    let report = diagnose_rows_observed(rows, Options { max_effects }, &progress);
+    let report = diagnose_rows_observed(
+        rows,
+        Options {
+            max_effects,
+            reading: args.reading.reading(),
+        },
+        &progress,
+    );
     bar.finish_and_clear();
     let mut report = report.map_err(|e| e.in_file(propid_io::error::display_name(&args.file)))?;
     if skipped > 0 {

@@ -41,6 +41,9 @@ pub struct Args {
     /// Air density [kg/m³] for C_Q.
     #[arg(long, default_value_t = 1.225, allow_negative_numbers = true)]
     pub density: f64,
+    /// How the columns are read.
+    #[command(flatten)]
+    pub reading: super::ReadingArgs,
     /// Output format.
     #[arg(long, value_enum, default_value_t = Format::Yaml)]
     pub format: Format,
@@ -62,6 +65,7 @@ impl Args {
             c2_max: self.c2_max,
             diameter: self.diameter,
             density: self.density,
+            reading: self.reading.reading(),
         }
     }
 }

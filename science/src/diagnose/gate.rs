@@ -4,11 +4,15 @@
 //! is about the data, not about a model: a value no stand produces (1e300), a force that is zero
 //! throughout, a sample rate or time unit no stand uses (time in milliseconds reads as a 0.2 Hz
 //! stand whose velocity changes a thousand times slower than its acceleration says), too few
-//! samples for the effects tested, regressors that do not vary independently (condition number),
+//! samples for the effects tested, the plausibility gate shared with `fit` (a flipped torque
+//! sign, a velocity in rpm: [`crate::plausibility`]), regressors that do not vary independently (condition number),
 //! and, after the fit, parameters that are not finite. Each failure is a [`CannotJudge`] reason;
 //! the report's verdict is then [`super::Verdict::CannotJudge`] and nothing else is concluded.
 
+use propid_core::estimate::LoadEstimator;
 use propid_io::tsv::Sample;
+
+use crate::plausibility::{self, Implausible};
 use serde::Serialize;
 
 /// Why the data cannot support a verdict.
@@ -27,11 +31,12 @@ pub enum CannotJudge {
         /// Median sample rate [Hz].
         rate_hz: f64,
     },
-    /// The velocity changes by a different multiple of the integrated acceleration than 1: the
-    /// time column is not in seconds (or acceleration and velocity disagree on units).
-    TimeUnit {
-        /// Δω / ∫a dt, fitted over short windows (1 when both are consistent and t is in s).
-        scale: f64,
+    /// The columns are not what the model assumes: a flipped torque sign, a velocity or a time
+    /// in another unit ([`crate::plausibility`]).
+    Implausible {
+        /// What the plausibility gate found.
+        #[serde(flatten)]
+        finding: Implausible,
     },
     /// A value no propeller stand produces.
     AbsurdValue {
@@ -68,11 +73,7 @@ impl std::fmt::Display for CannotJudge {
                 f,
                 "the median sample rate is {rate_hz:.3} Hz, outside {MIN_RATE}–{MAX_RATE} Hz: is the time column in seconds?"
             ),
-            CannotJudge::TimeUnit { scale } => write!(
-                f,
-                "the velocity changes {scale:.3e} times what the integrated acceleration predicts \
-                 (1 when t is in seconds; time in milliseconds gives 0.001)"
-            ),
+            CannotJudge::Implausible { finding } => write!(f, "{finding}"),
             CannotJudge::AbsurdValue {
                 column,
                 sample,
@@ -126,6 +127,14 @@ pub fn check(samples: &[Sample], columns: usize) -> Vec<CannotJudge> {
         });
         return why;
     }
+    // A named unit first: a velocity in deg/s passes 10⁵ "rad/s", which is a unit, not an
+    // absurd value.
+    let units = plausibility::velocity_scale(samples).and_then(plausibility::units_of);
+    if let Some(finding @ (Implausible::VelocityUnit { .. } | Implausible::TimeUnit { .. })) = units
+    {
+        why.push(CannotJudge::Implausible { finding });
+        return why;
+    }
     for (k, s) in samples.iter().enumerate() {
         let values = [s.t, s.force, s.velocity, s.acceleration];
         if let Some((column, value)) = BOUNDS
@@ -157,34 +166,18 @@ pub fn check(samples: &[Sample], columns: usize) -> Vec<CannotJudge> {
             why.push(CannotJudge::ImplausibleRate { rate_hz: rate });
         }
     }
-    if let Some(scale) = time_scale(samples) {
-        if !(0.2..=5.0).contains(&scale) {
-            why.push(CannotJudge::TimeUnit { scale });
+    if why.is_empty() {
+        let mut equations = LoadEstimator::new();
+        for s in samples {
+            equations.update(s.force, s.velocity, s.acceleration);
         }
+        why.extend(
+            plausibility::check(samples, &equations)
+                .into_iter()
+                .map(|finding| CannotJudge::Implausible { finding }),
+        );
     }
     why
-}
-
-/// Δω against ∫a dt over windows of 50 samples, fitted through the origin; `None` when the two
-/// are not clearly related (|correlation| < 0.8: too little motion to judge the unit by).
-fn time_scale(samples: &[Sample]) -> Option<f64> {
-    const WINDOW: usize = 50;
-    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
-    for w in samples.chunks_exact(WINDOW) {
-        let dw = w[WINDOW - 1].velocity - w[0].velocity;
-        let ia: f64 = w
-            .windows(2)
-            .map(|p| 0.5 * (p[0].acceleration + p[1].acceleration) * (p[1].t - p[0].t))
-            .sum();
-        sxy += dw * ia;
-        sxx += ia * ia;
-        syy += dw * dw;
-    }
-    if sxx <= 0.0 || syy <= 0.0 || !(sxx.is_finite() && syy.is_finite()) {
-        return None;
-    }
-    let r = sxy / (sxx * syy).sqrt();
-    (r.abs() >= 0.8).then(|| sxy / sxx)
 }
 
 /// Condition number of the column-scaled 2×2 normal matrix of the seed's regressors [F, ω|ω|].

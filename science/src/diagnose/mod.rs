@@ -81,6 +81,7 @@ pub enum Stage {
 pub type Observer<'a> = &'a (dyn Fn(Stage) + Sync);
 use signals::Signals;
 
+use crate::plausibility::Reading;
 use propid_io::tsv::{Row, Sample};
 use propid_io::InputError;
 
@@ -94,13 +95,33 @@ pub const STEADY_SHARE: f64 = 0.7;
 /// Options of a diagnosis.
 #[derive(Clone, Copy, Debug)]
 pub struct Options {
-    /// Largest number of effects to name.
+    /// Largest number of effects to name (at least 1: a diagnosis that tries none cannot say
+    /// the seed's model explains anything; the seed's model alone is `fit`).
     pub max_effects: usize,
+    /// How the columns are read (a reversed torque sign, a velocity in rpm).
+    pub reading: Reading,
 }
 
 impl Default for Options {
     fn default() -> Self {
-        Options { max_effects: 3 }
+        Options {
+            max_effects: 3,
+            reading: Reading::default(),
+        }
+    }
+}
+
+impl Options {
+    /// Checks the options once, before any data is read.
+    pub fn check(&self) -> Result<(), InputError> {
+        if self.max_effects == 0 {
+            return Err(InputError::invalid(
+                "max_effects is 0: a diagnosis that tries no effect cannot tell whether the seed's model \
+                 explains the data; give at least 1 (the seed's model alone is `propid fit`)"
+                    .into(),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -124,6 +145,7 @@ pub fn diagnose_rows_observed(
     options: Options,
     progress: Observer<'_>,
 ) -> Result<Report, InputError> {
+    options.check()?;
     let mut measured = Vec::new();
     let mut untestable = Vec::new();
     for &kind in EffectKind::ALL {
@@ -157,6 +179,7 @@ pub fn diagnose_rows_observed(
         .into_iter()
         .map(|row| {
             let mut s = row.sample;
+            options.reading.apply(&mut s);
             for m in &named {
                 if let candidate::Enters::Rows(effect) = m.kind.candidate().enters() {
                     effect.correct(m.estimate.value, &mut s);
@@ -222,8 +245,17 @@ pub fn diagnose_rows_observed(
 /// Rows may lack the force (a slow load cell): dynamics are diagnosed on the rows that have it;
 /// when those cannot identify the inertia (steady plateaus), the drag law is diagnosed instead.
 pub fn diagnose(samples: &[Sample], options: Options) -> Result<Report, InputError> {
+    options.check()?;
     diagnose_complete(
-        samples.iter().copied().filter(Sample::is_finite).collect(),
+        samples
+            .iter()
+            .copied()
+            .filter(Sample::is_finite)
+            .map(|mut s| {
+                options.reading.apply(&mut s);
+                s
+            })
+            .collect(),
         options,
         &|_| {},
     )

@@ -114,7 +114,11 @@ pub fn fit_columns(
             }
         }
     }
-    report_of(&estimator, options, window, name).map_err(FitError::from)
+    let gate: Vec<Sample> = (first..=last)
+        .take(super::GATE_ROWS as usize)
+        .map(|i| columns.sample(i))
+        .collect();
+    report_of(&estimator, options, window, name, &gate).map_err(FitError::from)
 }
 
 #[cfg(test)]
