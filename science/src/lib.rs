@@ -31,6 +31,7 @@ pub mod fit;
 pub mod plan;
 pub mod plausibility;
 pub mod propulsion;
+pub mod result;
 pub mod stand;
 
 pub use propid_io::InputError;

@@ -31,6 +31,7 @@ use propid_drive_proto::settings::{InitDuration, PatternDuration};
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
 use propid_science::excitation::Pattern;
 use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
+use propid_science::result::Outcome;
 use propid_science::stand::StandConfig;
 
 setting! {
@@ -181,7 +182,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let (all, _) = read_samples(&tsv)?;
     let report = diagnose(&all, Default::default())
         .map_err(|e| anyhow::anyhow!("{}: {}", tsv.display(), e))?;
-    let text = to_text(&report, &tsv.display().to_string());
+    let air = Some(propid_science::result::Air {
+        diameter_m: 0.1778,
+        density_kg_m3: fit_options.density,
+    });
+    let result = Outcome::from_diagnosis(&report, 0, air).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: the diagnosis could not judge the demo's run",
+            tsv.display()
+        )
+    })?;
+    std::fs::write(args.out.join("result.yaml"), result.to_yaml())?;
+    let text = result.to_text() + "\n" + &to_text(&report, &tsv.display().to_string());
     std::fs::write(args.out.join("diagnose.txt"), &text)?;
     std::fs::write(
         args.out.join("diagnose.json"),
@@ -203,7 +215,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         outcome.report.rows,
         if standby_last { "the simulated drive saw STANDBY last" } else { "the simulated drive did NOT see STANDBY last" }
     );
-    md += "## Fit (the seed's model and bounds, solved exactly)\n\n```yaml\n";
+    md += "## Result\n\n```text\n";
+    md += &result.to_text();
+    md += "```\n\n## Fit (the seed's model and bounds, solved exactly)\n\n```yaml\n";
     md += &fit_yaml;
     md += "```\n\n![fit](fit.svg)\n\n## Diagnosis\n\n```text\n";
     md += &text;
@@ -224,11 +238,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", html_path.display()))?;
     let mut out = std::io::stdout().lock();
     writeln!(out, "{text}")?;
+    let truth_off = 100.0 * (result.inertia.value / stand.inertia - 1.0);
     writeln!(
         out,
-        "demo: fit J = {:.4e} kg·m², c2 = {:.4e} (truth {:.4e}, {:.4e}); report in {} (open {} in a browser)",
-        fit.mass,
-        fit.c2,
+        "demo: {} (truth J = {:.4e} kg·m², {truth_off:+.2} %; c2 = {:.4e}); report in {} (open {} in a browser)",
+        result.headline(),
         stand.inertia,
         stand.c2,
         args.out.join("report.md").display(),

@@ -6,15 +6,19 @@ use propid_science::diagnose::{
     diagnose_rows_observed, report_figure, to_text, Options, Stage, Verdict,
 };
 
+use propid_science::result::Outcome;
+
 use crate::CannotJudge;
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Format {
-    /// A readable report.
+    /// The Result, then the diagnosis, for a person.
     Text,
-    /// JSON.
+    /// The diagnosis as JSON, its Result under `result`.
     Json,
+    /// The Result as YAML (the keys of the JSON's `result`).
+    Yaml,
 }
 
 /// Arguments of `propid diagnose`.
@@ -40,6 +44,9 @@ pub struct Args {
     /// How the columns are read.
     #[command(flatten)]
     pub reading: super::ReadingArgs,
+    /// The propeller and air, for C_Q.
+    #[command(flatten)]
+    pub propeller: super::PropellerArgs,
 }
 
 /// `--max-effects`: a count of at least one.
@@ -67,6 +74,7 @@ fn return_large_buffers_to_the_system() {
 
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    let air = args.propeller.air()?;
     return_large_buffers_to_the_system();
     // Progress on stderr (drawn only when it is a terminal): reading and each selection round
     // take seconds on an hour-long log.
@@ -119,9 +127,21 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
     }
-    let text = match args.format {
-        Format::Text => to_text(&report, &args.file.display().to_string()),
-        Format::Json => serde_json::to_string_pretty(&report)? + "\n",
+    let outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
+    let text = match (args.format, &outcome) {
+        (Format::Text, Some(o)) => {
+            o.to_text() + "\n" + &to_text(&report, &args.file.display().to_string())
+        }
+        (Format::Text, None) => to_text(&report, &args.file.display().to_string()),
+        (Format::Json, _) => {
+            let mut v = serde_json::to_value(&report)?;
+            if let (Some(o), Some(map)) = (&outcome, v.as_object_mut()) {
+                map.insert("result".into(), serde_json::to_value(o)?);
+            }
+            serde_json::to_string_pretty(&v)? + "\n"
+        }
+        (Format::Yaml, Some(o)) => o.to_yaml(),
+        (Format::Yaml, None) => String::new(),
     };
     use std::io::Write;
     std::io::stdout().write_all(text.as_bytes())?;

@@ -4,6 +4,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use propid_science::fit::{figure, fit_path_with, to_yaml, FitError, FitOptions};
+use propid_science::result::Outcome;
 
 use propid_io::input::Mappable;
 
@@ -35,12 +36,9 @@ pub struct Args {
     /// Largest quadratic drag coefficient c2 [N·s²/m²] or [N·m·s²/rad²].
     #[arg(long, default_value_t = 1e2, allow_negative_numbers = true)]
     pub c2_max: f64,
-    /// Propeller diameter [m]: also report the torque coefficient C_Q = 4π²·c2/(ρ·D⁵).
-    #[arg(long, allow_negative_numbers = true)]
-    pub diameter: Option<f64>,
-    /// Air density [kg/m³] for C_Q.
-    #[arg(long, default_value_t = 1.225, allow_negative_numbers = true)]
-    pub density: f64,
+    /// The propeller and air: also report the torque coefficient C_Q = 4π²·c2/(ρ·D⁵).
+    #[command(flatten)]
+    pub propeller: super::PropellerArgs,
     /// How the columns are read.
     #[command(flatten)]
     pub reading: super::ReadingArgs,
@@ -56,17 +54,18 @@ pub struct Args {
 }
 
 impl Args {
-    /// The fit's options.
-    pub fn options(&self) -> FitOptions {
-        FitOptions {
+    /// The fit's options (a bare diameter outside 0.02–3 m is refused).
+    pub fn options(&self) -> Result<FitOptions, propid_io::InputError> {
+        let (diameter, density) = self.propeller.resolve()?;
+        Ok(FitOptions {
             mass_min: self.mass_min,
             mass_max: self.mass_max,
             c1_max: self.c1_max,
             c2_max: self.c2_max,
-            diameter: self.diameter,
-            density: self.density,
+            diameter,
+            density,
             reading: self.reading.reading(),
-        }
+        })
     }
 }
 
@@ -86,7 +85,7 @@ fn progress_bar() -> indicatif::ProgressBar {
 /// Runs `propid fit`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Flags first: a bad bound or geometry is reported before any input is read.
-    let options = args.options();
+    let options = args.options()?;
     options.check()?;
     // A regular uncompressed file is mapped as it is. Anything else — standard input, a pipe
     // (`<(…)`, a FIFO), a gzip file — is spooled through propid_io::input (decompressed, its
@@ -112,6 +111,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::plot::write(plot, &figure(&report, &samples))?;
         eprintln!("plot written to {}", plot.display());
     }
+    // The Result, for a person, after the warnings; standard output keeps the seed's keys.
+    let outcome = Outcome::from_fit(&report, options.c1_max > 0.0, args.propeller.air()?);
+    for w in outcome
+        .warnings
+        .iter()
+        .filter(|w| !report.warnings.contains(w))
+    {
+        eprintln!("warning: {w}");
+    }
+    eprint!("{}", outcome.to_text());
     let text = match args.format {
         Format::Yaml => to_yaml(&report),
         Format::Json => serde_json::to_string_pretty(&report)? + "\n",

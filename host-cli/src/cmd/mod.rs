@@ -38,3 +38,41 @@ impl ReadingArgs {
         }
     }
 }
+
+/// The propeller and the air, for C_Q (`fit`, `diagnose`, `report`).
+#[derive(clap::Args, Debug)]
+pub struct PropellerArgs {
+    /// Propeller diameter, for the torque coefficient C_Q: 7in, 0.1778m, 178mm (a bare number is
+    /// metres, and refused outside 0.02–3 m).
+    #[arg(long, value_parser = propulsion::quantity(propid_science::propulsion::units::Dimension::Length))]
+    pub diameter: Option<propid_science::propulsion::units::Parsed>,
+    /// The air for C_Q (default: ISA sea level, 1.225 kg/m³).
+    #[command(flatten)]
+    pub air: propulsion::AirArgs,
+}
+
+impl PropellerArgs {
+    /// The diameter [m] and density [kg/m³], checked: a bare diameter outside 0.02–3 m is
+    /// refused (7 is inches far more often than a 7 m rotor).
+    pub fn resolve(&self) -> Result<(Option<f64>, f64), propid_io::InputError> {
+        use propid_science::propulsion::{air::Air, units::Dimension};
+        let density = self.air.air(Air::isa())?.density;
+        if let Some(d) = &self.diameter {
+            if let Some(note) =
+                propulsion::unit_notes("--diameter", d, Dimension::Length, 0.02..=3.0)
+            {
+                return Err(propid_io::InputError::invalid(note));
+            }
+        }
+        Ok((self.diameter.map(|d| d.si), density))
+    }
+
+    /// The Result's propeller, when a diameter was given.
+    pub fn air(&self) -> Result<Option<propid_science::result::Air>, propid_io::InputError> {
+        let (diameter, density) = self.resolve()?;
+        Ok(diameter.map(|diameter_m| propid_science::result::Air {
+            diameter_m,
+            density_kg_m3: density,
+        }))
+    }
+}

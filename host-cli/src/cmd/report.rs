@@ -18,6 +18,7 @@ use propid_io::output::AtomicOutput;
 use propid_io::tsv::read_rows;
 use propid_science::diagnose::{diagnose, report_figure, to_text, Options};
 use propid_science::fit::{figure, fit_path, FitError, FitOptions, FitReport};
+use propid_science::result::{Air, Outcome};
 
 use crate::html;
 
@@ -29,12 +30,15 @@ pub struct Args {
     /// Where to write the page (default: the recording's name with `.html`).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Propeller diameter [m], to report the torque coefficient C_Q.
-    #[arg(long)]
-    pub diameter: Option<f64>,
+    /// The propeller and air, for C_Q.
+    #[command(flatten)]
+    pub propeller: super::PropellerArgs,
+    /// How the columns are read.
+    #[command(flatten)]
+    pub reading: super::ReadingArgs,
 }
 
-fn fit_rows(fit: &FitReport) -> Vec<Vec<String>> {
+fn fit_rows(fit: &FitReport, options: &FitOptions) -> Vec<Vec<String>> {
     let mut rows = vec![
         vec![
             "J (inertia)".into(),
@@ -78,7 +82,11 @@ fn fit_rows(fit: &FitReport) -> Vec<Vec<String>> {
             "C_Q (torque coefficient)".into(),
             format!("{cq:.5e}"),
             String::new(),
-            "1".into(),
+            format!(
+                "1 (Q = C_Q·ρ·n²·D⁵, n in rev/s; D = {} m, ρ = {} kg/m³)",
+                options.diameter.unwrap_or(f64::NAN),
+                options.density
+            ),
         ]);
     }
     rows
@@ -103,7 +111,10 @@ fn build_from(
     let mut s = String::from("<section><h2>Fit: the seed's model, solved exactly</h2>\n");
     s += "<p>J·dω/dt = F − c1·ω − c2·ω·|ω|, with the seed's trimming (the last complete run of rows, \
           minus its first 10 %) and bounds.</p>\n";
-    s += &html::table(&["parameter", "value", "± 1σ", "unit"], &fit_rows(&fit));
+    s += &html::table(
+        &["parameter", "value", "± 1σ", "unit"],
+        &fit_rows(&fit, fit_options),
+    );
     for w in &fit.warnings {
         s += &format!("<p class=\"verdict\">warning: {}</p>\n", html::escape(w));
     }
@@ -115,8 +126,20 @@ fn build_from(
     let skipped = table.skipped;
     let notes = table.notes();
     let samples: Vec<_> = table.rows.into_iter().map(|row| row.sample).collect();
-    match diagnose(&samples, Options::default()) {
+    let options = Options {
+        reading: fit_options.reading,
+        ..Options::default()
+    };
+    let air = fit_options.diameter.map(|diameter_m| Air {
+        diameter_m,
+        density_kg_m3: fit_options.density,
+    });
+    let mut outcome = Outcome::from_fit(&fit, fit_options.c1_max > 0.0, air);
+    match diagnose(&samples, options) {
         Ok(report) => {
+            if let Some(o) = Outcome::from_diagnosis(&report, skipped as u64, air) {
+                outcome = o;
+            }
             let text = to_text(&report, &name);
             let mut s = String::from(
                 "<section><h2>Diagnosis: what the model gets wrong, and why</h2>\n<pre>",
@@ -138,6 +161,20 @@ fn build_from(
             html::escape(&e.to_string())
         )),
     }
+
+    // The headline: the Result (the extended model's where the diagnosis could judge).
+    let mut head = String::from("<section><h2>Result</h2>\n<pre>");
+    head += &html::escape(&outcome.to_text());
+    head += "</pre>\n";
+    for w in outcome
+        .warnings
+        .iter()
+        .filter(|w| !fit.warnings.contains(w))
+    {
+        head += &format!("<p class=\"verdict\">warning: {}</p>\n", html::escape(w));
+    }
+    head += "</section>\n";
+    sections.insert(0, head);
 
     let mut s = String::from("<section><h2>Reproduce</h2>\n<pre>");
     for c in reproduce {
@@ -168,8 +205,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         .unwrap_or_else(|| args.file.with_extension("html"));
     let input = Mappable::new(&args.file)?;
     let mut page_file = AtomicOutput::create(&out, &[&args.file])?;
+    let (diameter, density) = args.propeller.resolve()?;
     let options = FitOptions {
-        diameter: args.diameter,
+        diameter,
+        density,
+        reading: args.reading.reading(),
         ..FitOptions::default()
     };
     let page = build_from(&input, &options, &[])?;

@@ -1,0 +1,413 @@
+//! The one Result every command that fits ends with (`fit`, `diagnose`, `report`, `demo`).
+//!
+//! J, c2 (c1 when it was free), the named effects, and C_Q with the diameter and density it
+//! was computed with — each with its statistical standard error **and** the spread across the
+//! models the data could not rule out (the diagnosis's ambiguous alternatives) — the rows used
+//! and dropped, the warnings, and the caveat no data can lift: a torque-constant error scales J
+//! and c2 invisibly. [`Outcome`] is serialised by serde for JSON and rendered to YAML from the
+//! same value ([`Outcome::to_yaml`]), so both carry the same keys, and every number loads as a
+//! number in PyYAML. A value the data do not identify carries no standard error (never a 0, never
+//! NaN) and is listed under `not_identified`.
+
+use serde::Serialize;
+
+use crate::diagnose::{Report, Verdict};
+use crate::fit::{yaml_float, FitReport};
+
+/// Which model the Result's values are from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Model {
+    /// The seed's model J·dω/dt = F − c1·ω − c2·ω|ω| (`propid fit`).
+    Seed,
+    /// The seed's model with the effects the diagnosis named (`propid diagnose`).
+    Extended,
+}
+
+/// A value with its unit and uncertainties.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Value {
+    /// The estimate.
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+    /// Statistical standard error (absent when the data do not identify the value).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stderr: Option<f64>,
+    /// The largest difference to the value of the models the data could not rule out (absent
+    /// when no model comparison was made: `propid fit`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model_spread: Option<f64>,
+}
+
+impl Value {
+    fn new(value: f64, unit: &'static str, stderr: f64, model_spread: Option<f64>) -> Value {
+        let identified = stderr > 0.0
+            && stderr.is_finite()
+            && stderr <= crate::plausibility::MAX_RELATIVE_STDERR * value.abs();
+        Value {
+            value,
+            unit,
+            stderr: identified.then_some(stderr),
+            model_spread,
+        }
+    }
+
+    fn scaled(&self, k: f64, unit: &'static str) -> Value {
+        Value {
+            value: self.value * k,
+            unit,
+            stderr: self.stderr.map(|s| s * k.abs()),
+            model_spread: self.model_spread.map(|s| s * k.abs()),
+        }
+    }
+}
+
+/// A named effect of the extended model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Effect {
+    /// Its name (`torque_lag`, …).
+    pub name: String,
+    /// Its parameter.
+    #[serde(flatten)]
+    pub value: Value,
+    /// What it means, in a sentence.
+    pub explanation: String,
+}
+
+/// The propeller's geometry and air a coefficient was computed with.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Air {
+    /// Diameter [m].
+    pub diameter_m: f64,
+    /// Air density [kg/m³].
+    pub density_kg_m3: f64,
+}
+
+/// Plausible torque coefficients C_Q = Q/(ρ n² D⁵) of propellers and fans (n in rev/s): a
+/// value outside is a unit mistake far more often than a propeller.
+pub const C_Q_RANGE: std::ops::RangeInclusive<f64> = 1e-4..=0.1;
+
+/// The caveat every Result carries.
+pub const TORQUE_CONSTANT_CAVEAT: &str = "J and c2 are in the torque column's units: a torque-constant (K_t) error r scales both by r and leaves no trace in the data; only a known inertia or a load cell checks it";
+
+/// The Result.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Outcome {
+    /// Which model the values are from.
+    pub model: Model,
+    /// The inertia J.
+    pub inertia: Value,
+    /// The quadratic drag coefficient c2 (for a drag law k·|ω|^p, its quadratic equivalent at
+    /// the RMS speed).
+    pub c2: Value,
+    /// The viscous coefficient c1, when it was free.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c1: Option<Value>,
+    /// The effects named (empty for the seed's model).
+    pub effects: Vec<Effect>,
+    /// The torque coefficient C_Q = 4π²·c2/(ρ·D⁵), when a diameter was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub c_q: Option<Value>,
+    /// The diameter and density C_Q used.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub air: Option<Air>,
+    /// Whether the seed's model explains the data (absent when not tested: `propid fit`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed_model_holds: Option<bool>,
+    /// Parameters the data do not identify (their values are not measurements).
+    pub not_identified: Vec<String>,
+    /// Rows used.
+    pub rows_used: u64,
+    /// Rows dropped (incomplete, cut, or outside the seed's window).
+    pub rows_dropped: u64,
+    /// What to know before using the values.
+    pub warnings: Vec<String>,
+    /// [`TORQUE_CONSTANT_CAVEAT`].
+    pub caveat: &'static str,
+}
+
+const J_UNIT: &str = "kg·m²";
+const C2_UNIT: &str = "N·m·s²/rad²";
+
+impl Outcome {
+    /// The Result of the seed's fit.
+    pub fn from_fit(fit: &FitReport, c1_free: bool, air: Option<Air>) -> Outcome {
+        let mut out = Outcome {
+            model: Model::Seed,
+            inertia: Value::new(fit.mass, J_UNIT, fit.mass_stderr, None),
+            c2: Value::new(fit.c2, C2_UNIT, fit.c2_stderr, None),
+            c1: c1_free.then(|| Value::new(fit.c1, "N·m·s/rad", fit.c1_stderr, None)),
+            effects: Vec::new(),
+            c_q: None,
+            air: None,
+            seed_model_holds: None,
+            not_identified: fit.not_identified.iter().map(|s| s.to_string()).collect(),
+            rows_used: fit.samples,
+            rows_dropped: fit.rows.saturating_sub(fit.samples),
+            warnings: fit.warnings.clone(),
+            caveat: TORQUE_CONSTANT_CAVEAT,
+        };
+        out.warnings.push(
+            "the seed's model only: `propid diagnose` tests whether it explains the data and gives the spread across the models the data cannot rule out".into(),
+        );
+        out.finish(air);
+        out
+    }
+
+    /// The Result of a diagnosis (`None` when it could not judge). `rows_dropped` counts the
+    /// rows the reader dropped before the diagnosis saw them.
+    pub fn from_diagnosis(r: &Report, rows_dropped: u64, air: Option<Air>) -> Option<Outcome> {
+        if matches!(r.verdict, Verdict::CannotJudge { .. }) {
+            return None;
+        }
+        let ext = &r.extended;
+        // The spread across the models the data could not rule out: each ambiguity's
+        // alternative, against the extended model.
+        let spread = |f: &dyn Fn(&crate::diagnose::BaseModel) -> f64| {
+            r.ambiguities
+                .iter()
+                .map(|a| (f(&a.alternative) - f(ext)).abs())
+                .filter(|d| d.is_finite())
+                .fold(0.0, f64::max)
+        };
+        let effects = r
+            .effects
+            .iter()
+            .map(|e| {
+                let alternatives = r
+                    .ambiguities
+                    .iter()
+                    .flat_map(|a| &a.alternative_effects)
+                    .filter(|v| v.effect == e.effect)
+                    .map(|v| (v.value - e.value).abs())
+                    .filter(|d| d.is_finite())
+                    .fold(0.0, f64::max);
+                Effect {
+                    name: e.effect.name().to_string(),
+                    value: Value::new(e.value, e.unit, e.stderr, Some(alternatives)),
+                    explanation: e.explanation.clone(),
+                }
+            })
+            .collect();
+        let mut out = Outcome {
+            model: Model::Extended,
+            inertia: Value::new(
+                ext.inertia,
+                J_UNIT,
+                ext.inertia_stderr,
+                Some(spread(&|m| m.inertia)),
+            ),
+            c2: Value::new(ext.c2, C2_UNIT, ext.c2_stderr, Some(spread(&|m| m.c2))),
+            c1: None,
+            effects,
+            c_q: None,
+            air: None,
+            seed_model_holds: Some(r.verdict == Verdict::NothingWrong),
+            not_identified: r
+                .unidentified
+                .iter()
+                .map(|u| u.parameter.symbol().to_string())
+                .collect(),
+            rows_used: r.samples as u64,
+            rows_dropped,
+            warnings: r.notes.clone(),
+            caveat: TORQUE_CONSTANT_CAVEAT,
+        };
+        if !r.ambiguities.is_empty() {
+            out.warnings.push(format!(
+                "the data cannot rule out {} other model(s): model_spread is how far their values lie from these",
+                r.ambiguities.len()
+            ));
+        }
+        out.finish(air);
+        Some(out)
+    }
+
+    /// C_Q and its range check; every parameter without a standard error listed.
+    fn finish(&mut self, air: Option<Air>) {
+        for (name, v) in [("J", &self.inertia), ("c2", &self.c2)] {
+            if v.stderr.is_none()
+                && !self
+                    .not_identified
+                    .iter()
+                    .any(|n| n == name || (name == "J" && n == "mass"))
+            {
+                self.not_identified.push(name.to_string());
+            }
+        }
+        let Some(air) = air else { return };
+        let k = 4.0 * std::f64::consts::PI.powi(2) / (air.density_kg_m3 * air.diameter_m.powi(5));
+        let c_q = self.c2.scaled(k, "1");
+        if !C_Q_RANGE.contains(&c_q.value) {
+            self.warnings.push(format!(
+                "C_Q = {:.3e} is outside {:e}–{:e}, where propellers lie: is the diameter {} m right (a diameter in inches read as metres gives C_Q about 10⁸ times too small: write --diameter {}in)?",
+                c_q.value,
+                C_Q_RANGE.start(),
+                C_Q_RANGE.end(),
+                air.diameter_m,
+                air.diameter_m
+            ));
+        }
+        self.c_q = Some(c_q);
+        self.air = Some(air);
+    }
+
+    /// The Result as text for a person.
+    pub fn to_text(&self) -> String {
+        let v = |name: &str, x: &Value| {
+            let unit = if x.unit == "1" { "" } else { x.unit };
+            let mut s = format!("   {name:<4} = {:.4e} {unit}", x.value);
+            match x.stderr {
+                Some(se) => s += &format!(" ± {se:.2e} (statistical)"),
+                None => s += " (not identified by these data)",
+            }
+            match x.model_spread {
+                Some(m) if m > 0.0 => s += &format!(" ± {m:.2e} (models the data cannot rule out)"),
+                Some(_) => s += ", no other model fits as well",
+                None => {}
+            }
+            s + "\n"
+        };
+        let mut s = match self.model {
+            Model::Seed => "Result (the seed's model)".to_string(),
+            Model::Extended if self.effects.is_empty() => {
+                "Result (the seed's model, tested)".into()
+            }
+            Model::Extended => format!(
+                "Result (the seed's model with {})",
+                self.effects
+                    .iter()
+                    .map(|e| e.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        s += &format!(
+            ": {} rows used, {} dropped\n",
+            self.rows_used, self.rows_dropped
+        );
+        s += &v("J", &self.inertia);
+        s += &v("c2", &self.c2);
+        if let Some(c1) = &self.c1 {
+            s += &v("c1", c1);
+        }
+        for e in &self.effects {
+            s += &v(&e.name, &e.value);
+        }
+        if let (Some(c_q), Some(air)) = (&self.c_q, &self.air) {
+            s += &v("C_Q", c_q);
+            s += &format!(
+                "        (Q = C_Q·ρ·n²·D⁵, n in rev/s) with D = {:.4} m ({:.2} in), ρ = {:.4} kg/m³\n",
+                air.diameter_m,
+                air.diameter_m / 0.0254,
+                air.density_kg_m3
+            );
+        }
+        match self.seed_model_holds {
+            Some(true) => s += "   The seed's model explains these data.\n",
+            Some(false) if !self.effects.is_empty() => {
+                s += "   The seed's model is wrong on these data: use these extended values, not `propid fit`'s.\n"
+            }
+            _ => {}
+        }
+        if !self.not_identified.is_empty() {
+            s += &format!(
+                "   Not identified (values are not measurements): {}\n",
+                self.not_identified.join(", ")
+            );
+        }
+        s += &format!("   Caveat: {}.\n", self.caveat);
+        s
+    }
+
+    /// The Result as YAML with the JSON's keys; every number loads as a number in YAML 1.1
+    /// readers (PyYAML) and 1.2 readers alike.
+    pub fn to_yaml(&self) -> String {
+        let value = serde_json::to_value(self).unwrap_or(serde_json::Value::Null);
+        let mut out = String::new();
+        yaml(&value, 0, &mut out);
+        out
+    }
+}
+
+/// Block-style YAML of a JSON value at `indent`: maps and lists on their own lines, floats by
+/// [`yaml_float`], strings JSON-quoted (a JSON string is a YAML double-quoted scalar).
+fn yaml(v: &serde_json::Value, indent: usize, out: &mut String) {
+    use serde_json::Value as J;
+    let pad = " ".repeat(indent);
+    let scalar = |v: &J| -> String {
+        match v {
+            J::Number(n) if n.is_f64() => yaml_float(n.as_f64().unwrap_or(f64::NAN), 6),
+            J::Number(n) => n.to_string(),
+            J::String(s) => serde_json::to_string(s).unwrap_or_default(),
+            J::Bool(b) => b.to_string(),
+            J::Null => "null".into(),
+            J::Array(a) if a.is_empty() => "[]".into(),
+            J::Object(o) if o.is_empty() => "{}".into(),
+            _ => String::new(),
+        }
+    };
+    let nested = |v: &J| {
+        matches!(v, J::Array(a) if !a.is_empty()) || matches!(v, J::Object(o) if !o.is_empty())
+    };
+    match v {
+        J::Object(map) => {
+            for (k, x) in map {
+                if nested(x) {
+                    out.push_str(&format!("{pad}{k}:\n"));
+                    yaml(x, indent + 2, out);
+                } else {
+                    out.push_str(&format!("{pad}{k}: {}\n", scalar(x)));
+                }
+            }
+        }
+        J::Array(items) => {
+            for x in items {
+                if nested(x) {
+                    let mut inner = String::new();
+                    yaml(x, indent + 2, &mut inner);
+                    // "- " takes the place of the first line's indentation.
+                    let inner = inner.replacen(&format!("{pad}  "), &format!("{pad}- "), 1);
+                    out.push_str(&inner);
+                } else {
+                    out.push_str(&format!("{pad}- {}\n", scalar(x)));
+                }
+            }
+        }
+        x => out.push_str(&format!("{pad}{}\n", scalar(x))),
+    }
+}
+
+impl Outcome {
+    /// One line: J, c2 and C_Q with its diameter (the demo's closing line).
+    pub fn headline(&self) -> String {
+        let mut s = format!(
+            "J = {:.4e} kg·m², c2 = {:.4e} N·m·s²/rad² ({})",
+            self.inertia.value,
+            self.c2.value,
+            match self.model {
+                Model::Seed => "the seed's model".to_string(),
+                Model::Extended if self.effects.is_empty() => "the seed's model, tested".into(),
+                Model::Extended => format!(
+                    "with {}",
+                    self.effects
+                        .iter()
+                        .map(|e| format!("{} = {:.4e} {}", e.name, e.value.value, e.value.unit))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            }
+        );
+        if let (Some(c_q), Some(air)) = (&self.c_q, &self.air) {
+            s += &format!(
+                ", C_Q = {:.4e} at D = {:.4} m ({:.2} in), ρ = {:.4} kg/m³",
+                c_q.value,
+                air.diameter_m,
+                air.diameter_m / 0.0254,
+                air.density_kg_m3
+            );
+        }
+        s
+    }
+}
