@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# propid fit's YAML must load as floats in PyYAML (YAML 1.1), as the seed's output did. The test
+# propid fit's YAML and the Result's must load as numbers in PyYAML (YAML 1.1), as the seed's output did. Each test
 # is named exactly: a rename makes this step fail, not pass with nothing run.
 set -euo pipefail
 . ci/lib.sh
 python3 -m pip install --quiet --disable-pip-version-check pyyaml
 expect_tests 1 cargo test -q -p propid --test fit_cli -- --ignored --exact yaml_numbers_are_floats_to_pyyaml
+# The Result (diagnose --format yaml/json): the same keys and every number a number to PyYAML and json.
+expect_tests 1 cargo test -q -p propid --test result_cli -- --ignored --exact python_reads_the_result_as_numbers

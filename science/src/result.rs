@@ -14,6 +14,15 @@ use serde::Serialize;
 use crate::diagnose::{Report, Verdict};
 use crate::fit::{yaml_float, FitReport};
 
+/// A float as [`yaml_float`] writes it, with the shortest mantissa that reads back to the same
+/// f64 (the YAML's numbers equal the JSON's, bit for bit).
+fn exact_float(v: f64) -> String {
+    let digits = format!("{v:e}").split_once('e').map_or(0, |(m, _)| {
+        m.trim_start_matches('-').len().saturating_sub(2)
+    });
+    yaml_float(v, digits)
+}
+
 /// Which model the Result's values are from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -338,7 +347,7 @@ fn yaml(v: &serde_json::Value, indent: usize, out: &mut String) {
     let pad = " ".repeat(indent);
     let scalar = |v: &J| -> String {
         match v {
-            J::Number(n) if n.is_f64() => yaml_float(n.as_f64().unwrap_or(f64::NAN), 6),
+            J::Number(n) if n.is_f64() => exact_float(n.as_f64().unwrap_or(f64::NAN)),
             J::Number(n) => n.to_string(),
             J::String(s) => serde_json::to_string(s).unwrap_or_default(),
             J::Bool(b) => b.to_string(),

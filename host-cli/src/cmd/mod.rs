@@ -39,6 +39,9 @@ impl ReadingArgs {
     }
 }
 
+/// Air density when none is given [kg/m³].
+pub const DENSITY: f64 = 1.225;
+
 /// The propeller and the air, for C_Q (`fit`, `diagnose`, `report`).
 #[derive(clap::Args, Debug)]
 pub struct PropellerArgs {
@@ -56,7 +59,9 @@ impl PropellerArgs {
     /// refused (7 is inches far more often than a 7 m rotor).
     pub fn resolve(&self) -> Result<(Option<f64>, f64), propid_io::InputError> {
         use propid_science::propulsion::{air::Air, units::Dimension};
-        let density = self.air.air(Air::isa())?.density;
+        // One default everywhere: 1.225 kg/m³ (ISA sea level, as every propeller table quotes it).
+        let sea_level = Air::with_density(DENSITY, None).map_err(propid_io::InputError::invalid)?;
+        let density = self.air.air(sea_level)?.density;
         if let Some(d) = &self.diameter {
             if let Some(note) =
                 propulsion::unit_notes("--diameter", d, Dimension::Length, 0.02..=3.0)

@@ -1,0 +1,172 @@
+//! The Result from the command line (issue 26, item 1): the same keys in JSON and YAML, every
+//! value a number where a number is meant (PyYAML and json in Python too), units, diameter,
+//! density, rows used and dropped, warnings; C_Q outside a propeller's range warns of inches.
+
+mod common;
+
+use common::{propid, propid_ok};
+use std::path::{Path, PathBuf};
+
+/// A simulated chirp run with a hidden torque lag of 12 ms.
+fn lagged(dir: &Path) -> PathBuf {
+    let tsv = dir.join("lag.tsv");
+    propid_ok(&[
+        "sim",
+        "--pattern",
+        "chirp",
+        "--duration",
+        "20",
+        "--torque-lag",
+        "0.012",
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    tsv
+}
+
+/// Every key path of a JSON value, with the kind of its leaf.
+fn leaves(v: &serde_json::Value, at: String, out: &mut Vec<(String, &'static str)>) {
+    match v {
+        serde_json::Value::Object(m) => m
+            .iter()
+            .for_each(|(k, x)| leaves(x, format!("{at}.{k}"), out)),
+        serde_json::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| leaves(x, format!("{at}[{i}]"), out)),
+        serde_json::Value::Number(_) => out.push((at, "number")),
+        serde_json::Value::String(_) => out.push((at, "string")),
+        serde_json::Value::Bool(_) => out.push((at, "bool")),
+        serde_json::Value::Null => out.push((at, "null")),
+    }
+}
+
+fn result_of(tsv: &Path, flags: &[&str]) -> (serde_json::Value, serde_json::Value, String) {
+    let t = tsv.to_str().unwrap();
+    let json = propid_ok(&[&["diagnose", t, "--format", "json"], flags].concat());
+    let json: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    let yaml = propid_ok(&[&["diagnose", t, "--format", "yaml"], flags].concat());
+    let yaml = String::from_utf8(yaml.stdout).unwrap();
+    let parsed: serde_json::Value = serde_norway::from_str(&yaml).unwrap();
+    (json["result"].clone(), parsed, yaml)
+}
+
+#[test]
+fn json_and_yaml_carry_the_same_result_with_its_units_and_air() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = lagged(dir.path());
+    let (json, yaml, text) = result_of(&tsv, &["--diameter", "7in"]);
+    let (mut a, mut b) = (vec![], vec![]);
+    leaves(&json, String::new(), &mut a);
+    leaves(&yaml, String::new(), &mut b);
+    assert_eq!(a, b, "{text}");
+    assert!(a.iter().all(|(_, kind)| *kind != "null"), "{a:?}");
+    assert_eq!(json["model"], "extended");
+    assert_eq!(json["effects"][0]["name"], "torque_lag");
+    assert_eq!(json["effects"][0]["unit"], "s");
+    assert_eq!(json["inertia"]["unit"], "kg·m²");
+    assert_eq!(json["air"]["diameter_m"].as_f64(), Some(0.1778));
+    assert_eq!(json["air"]["density_kg_m3"].as_f64(), Some(1.225));
+    assert!(json["rows_used"].as_u64().unwrap() > 9000);
+    assert!(json["rows_dropped"].is_u64());
+    assert!(json["caveat"].as_str().unwrap().contains("torque-constant"));
+    assert_eq!(json["seed_model_holds"], false);
+    // The extended J, not the seed fit's biased one, within 2 % of the truth.
+    let j = json["inertia"]["value"].as_f64().unwrap();
+    assert!((j / 2e-5 - 1.0).abs() < 0.02, "J {j}");
+    for v in [
+        &json["inertia"],
+        &json["c2"],
+        &json["c_q"],
+        &json["effects"][0],
+    ] {
+        let se = v["stderr"].as_f64().unwrap();
+        assert!(se > 0.0 && se.is_finite(), "{v}");
+        assert!(v["model_spread"].as_f64().unwrap() >= 0.0, "{v}");
+    }
+    // The text leads with the Result.
+    let out = propid_ok(&["diagnose", tsv.to_str().unwrap(), "--diameter", "0.1778m"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.starts_with("Result (the seed's model with torque_lag)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("with D = 0.1778 m (7.00 in), ρ = 1.2250 kg/m³"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_diameter_in_inches_read_as_metres_is_refused_or_warned() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = lagged(dir.path());
+    let t = tsv.to_str().unwrap();
+    for command in ["fit", "diagnose"] {
+        let out = propid(&[command, t, "--diameter", "7"], None);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{command}: {err}");
+        assert!(
+            err.contains("--diameter 7 has no unit") && err.contains("7in"),
+            "{command}: {err}"
+        );
+    }
+    // 2.5 m is a length a bare number may mean: C_Q then falls outside a propeller's range.
+    let (json, _, _) = result_of(&tsv, &["--diameter", "2.5"]);
+    let warnings = json["warnings"].to_string();
+    assert!(
+        warnings.contains("outside") && warnings.contains("--diameter 2.5in"),
+        "{warnings}"
+    );
+    // fit says the same on stderr, beside the seed's YAML.
+    let out = propid_ok(&["fit", t, "--diameter", "2.5m"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("Result (the seed's model)") && err.contains("C_Q"),
+        "{err}"
+    );
+    assert!(err.contains("is outside"), "{err}");
+}
+
+/// PyYAML (YAML 1.1) and Python's json read every number of the Result as a number, and the
+/// same keys from both.
+#[test]
+#[ignore = "needs python3 with PyYAML (ci/steps/35-fit-pyyaml.sh runs it)"]
+fn python_reads_the_result_as_numbers() {
+    common::require_python("yaml");
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = lagged(dir.path());
+    let t = tsv.to_str().unwrap();
+    let yaml = dir.path().join("r.yaml");
+    let json = dir.path().join("r.json");
+    let out = propid_ok(&["diagnose", t, "--diameter", "7in", "--format", "yaml"]);
+    std::fs::write(&yaml, &out.stdout).unwrap();
+    let out = propid_ok(&["diagnose", t, "--diameter", "7in", "--format", "json"]);
+    std::fs::write(&json, &out.stdout).unwrap();
+    let script = "import sys, json, yaml\n\
+        y = yaml.safe_load(open(sys.argv[1]))\n\
+        j = json.load(open(sys.argv[2]))['result']\n\
+        assert y == j, (y, j)\n\
+        numeric = ('value', 'stderr', 'model_spread', 'diameter_m', 'density_kg_m3', 'rows_used', 'rows_dropped')\n\
+        seen = []\n\
+        def walk(v, key):\n\
+        \x20   if isinstance(v, dict):\n\
+        \x20       [walk(x, k) for k, x in v.items()]\n\
+        \x20   elif isinstance(v, list):\n\
+        \x20       [walk(x, key) for x in v]\n\
+        \x20   elif key in numeric:\n\
+        \x20       assert type(v) in (int, float) and v == v, (key, v)\n\
+        \x20       seen.append(key)\n\
+        walk(y, None)\n\
+        assert len(seen) >= 15, seen\n\
+        print(len(seen))";
+    let out = std::process::Command::new("python3")
+        .args(["-c", script, yaml.to_str().unwrap(), json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
