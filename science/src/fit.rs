@@ -989,7 +989,7 @@ mod tests {
                     &mut |_, _| {},
                 )
                 .unwrap();
-                let got = report_of(&want, &options, want_window, "mem").unwrap();
+                let got = report_of(&want, &options, want_window, "mem", &[]).unwrap();
                 assert_eq!(report.samples, want_window.last - want_window.first + 1);
                 assert_eq!(report.rows, 6000);
                 assert_eq!(report.warnings, got.warnings, "holes {h}, {chunks} chunks");

@@ -307,7 +307,8 @@ pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
         return Some(Decision::rejected(Rejection::Inadmissible { why }));
     }
     let gain = Gain::of(parent, &e.errors);
-    if !(gain.mean > 0.0) {
+    // NaN included: no positive gain.
+    if gain.mean.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return Some(Decision::rejected(Rejection::NoGain));
     }
     if !gain.significant() {
