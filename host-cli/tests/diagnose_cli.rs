@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{propid, propid_ok};
+use common::{propid, propid_ok, write_rows};
 
 #[test]
 fn sim_then_diagnose_finds_a_hidden_torque_lag() {
@@ -103,38 +103,7 @@ fn bad_input_exits_2() {
 /// A clean simulated recording, each row's columns as numbers (ts_local, t, force, velocity,
 /// acceleration, position).
 fn clean_rows(dir: &std::path::Path) -> (String, Vec<Vec<f64>>) {
-    let tsv = dir.join("clean.tsv");
-    let out = propid(
-        &[
-            "sim",
-            "--pattern",
-            "chirp",
-            "--duration",
-            "20",
-            "--seed",
-            "4",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(out.status.success());
-    let text = std::fs::read_to_string(&tsv).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_string();
-    let rows = lines
-        .map(|l| l.split('\t').map(|x| x.parse().unwrap()).collect())
-        .collect();
-    (header, rows)
-}
-
-fn write_rows(path: &std::path::Path, header: &str, rows: &[Vec<f64>]) {
-    let mut text = header.to_string() + "\n";
-    for r in rows {
-        let cols: Vec<String> = r.iter().map(|x| format!("{x:e}")).collect();
-        text += &(cols.join("\t") + "\n");
-    }
-    std::fs::write(path, text).unwrap();
+    common::simulated_rows(dir, 4)
 }
 
 /// Garbage in: each case gets "cannot judge: <why>", exit status 3, never a verdict.

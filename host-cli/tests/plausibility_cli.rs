@@ -10,43 +10,17 @@ use std::path::{Path, PathBuf};
 
 /// A simulated chirp run (J = 2e-5, c2 = 1.5e-8), its header and rows as numbers.
 fn simulated(dir: &Path) -> (String, Vec<Vec<f64>>) {
-    let tsv = dir.join("clean.tsv");
-    let out = propid(
-        &[
-            "sim",
-            "--pattern",
-            "chirp",
-            "--duration",
-            "20",
-            "--seed",
-            "7",
-            "-o",
-            tsv.to_str().unwrap(),
-        ],
-        None,
-    );
-    assert!(out.status.success());
-    let text = std::fs::read_to_string(&tsv).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_string();
+    let (header, rows) = common::simulated_rows(dir, 7);
     assert_eq!(
         header,
         "ts_local\tt\tforce\tvelocity\tacceleration\tposition"
     );
-    let rows = lines
-        .map(|l| l.split('\t').map(|x| x.parse().unwrap()).collect())
-        .collect();
     (header, rows)
 }
 
 fn write(dir: &Path, name: &str, header: &str, rows: &[Vec<f64>]) -> PathBuf {
-    let mut text = header.to_string() + "\n";
-    for r in rows {
-        let cols: Vec<String> = r.iter().map(|x| format!("{x:e}")).collect();
-        text += &(cols.join("\t") + "\n");
-    }
     let path = dir.join(name);
-    std::fs::write(&path, text).unwrap();
+    common::write_rows(&path, header, rows);
     path
 }
 

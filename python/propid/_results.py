@@ -124,6 +124,10 @@ class FitResult(_Record):
         "condition_number", "Condition number of the scaled normal matrix.", "number"
     )
     at_bound: _Field[List[str]] = _Field("at_bound", "Parameters sitting on a bound.")
+    not_identified: _Field[List[str]] = _Field(
+        "not_identified",
+        "Free parameters the data do not identify (on a bound, or a standard error above 30 %).",
+    )
     c_q: _Field[Optional[float]] = _Field(
         "c_q", "Torque coefficient C_Q, when a diameter was given.", "optional"
     )

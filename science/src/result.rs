@@ -293,8 +293,9 @@ impl Outcome {
             ),
         };
         s += &format!(
-            ": {} rows used, {} dropped\n",
-            self.rows_used, self.rows_dropped
+            ": {} of {} rows used\n",
+            self.rows_used,
+            self.rows_used + self.rows_dropped
         );
         s += &v("J", &self.inertia);
         s += &v("c2", &self.c2);

@@ -47,7 +47,7 @@ pub const DENSITY: f64 = 1.225;
 pub struct PropellerArgs {
     /// Propeller diameter, for the torque coefficient C_Q: 7in, 0.1778m, 178mm (a bare number is
     /// metres, and refused outside 0.02–3 m).
-    #[arg(long, value_parser = propulsion::quantity(propid_science::propulsion::units::Dimension::Length))]
+    #[arg(long, allow_negative_numbers = true, value_parser = propulsion::quantity(propid_science::propulsion::units::Dimension::Length))]
     pub diameter: Option<propid_science::propulsion::units::Parsed>,
     /// The air for C_Q (default: ISA sea level, 1.225 kg/m³).
     #[command(flatten)]

@@ -46,7 +46,7 @@ pub fn quantity(dimension: Dimension) -> impl Fn(&str) -> Result<Parsed, String>
 #[derive(clap::Args, Debug)]
 pub struct AirArgs {
     /// Air density [kg/m³].
-    #[arg(long, value_parser = quantity(Dimension::Density), conflicts_with_all = ["temperature", "pressure"])]
+    #[arg(long, allow_negative_numbers = true, value_parser = quantity(Dimension::Density), conflicts_with_all = ["temperature", "pressure"])]
     pub density: Option<Parsed>,
     /// Air temperature (20C, 293K), with --pressure: the density of dry air.
     #[arg(long, value_parser = quantity(Dimension::Temperature), requires = "pressure")]

@@ -132,3 +132,38 @@ pub fn assert_seed_setpoints(setpoints: &[serde_json::Value]) {
         assert!(v[0] == 0.0 || (0.0999..=0.9001).contains(&v[0]), "{}", v[0]);
     }
 }
+
+/// A simulated chirp run of 20 s (`propid sim`, noise seed `seed`) in `dir`: its header and its
+/// rows as numbers (ts_local, t, force, velocity, acceleration, position).
+pub fn simulated_rows(dir: &Path, seed: u32) -> (String, Vec<Vec<f64>>) {
+    let tsv = dir.join("clean.tsv");
+    let seed = seed.to_string();
+    propid_ok(&[
+        "sim",
+        "--pattern",
+        "chirp",
+        "--duration",
+        "20",
+        "--seed",
+        &seed,
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    let text = std::fs::read_to_string(&tsv).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let rows = lines
+        .map(|l| l.split('\t').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    (header, rows)
+}
+
+/// Writes `rows` under `header` as a TSV at `path`.
+pub fn write_rows(path: &Path, header: &str, rows: &[Vec<f64>]) {
+    let mut text = header.to_string() + "\n";
+    for r in rows {
+        let cols: Vec<String> = r.iter().map(|x| format!("{x:e}")).collect();
+        text += &(cols.join("\t") + "\n");
+    }
+    std::fs::write(path, text).unwrap();
+}
