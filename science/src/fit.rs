@@ -967,10 +967,12 @@ mod tests {
             for i in 0..6000usize {
                 let q = 1.0 + (i as f64 * 0.01).sin();
                 let a = (q - 0.1 * w - 0.02 * w * w.abs()) / 0.5 + (i as f64 * 7.7).sin() * 0.01;
+                // t in seconds, as the velocity is integrated (the plausibility gate checks it).
+                let t = i as f64 * 0.005;
                 if hole.contains(&i) {
-                    text += &format!("{i}\t{q}\tnan\t{a}\n");
+                    text += &format!("{t}\t{q}\tnan\t{a}\n");
                 } else {
-                    text += &format!("{i}\t{q}\t{w}\t{a}\n");
+                    text += &format!("{t}\t{q}\t{w}\t{a}\n");
                 }
                 if i % 977 == 0 {
                     text += "\n \t\n";

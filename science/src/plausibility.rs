@@ -4,11 +4,13 @@
 //! J on its bound, a velocity logged in rpm gives c2 91× too small, and both look like numbers.
 //! These checks ask whether the data are what the model assumes before any model is believed:
 //!
-//! - **the torque sign**: the torque must drive the acceleration it causes. Fitted freely (no
-//!   bounds), 1/J of a = Q/J − (c1/J)·ω − (c2/J)·ω|ω| must be positive; a clearly negative one
-//!   (t < −[`SIGN_T`]) is a flipped sign. On steady plateaus, where the acceleration says little,
-//!   the power Q·ω a propeller absorbs must be positive: a clear negative correlation of Q with ω
-//!   is a flipped sign too.
+//! - **the torque sign**: a propeller absorbs power, so Q·ω must be positive on the whole: a
+//!   torque negatively correlated with the speed is a flipped sign when the torque also works
+//!   against the acceleration it causes (1/J of a = Q/J − (c1/J)·ω − (c2/J)·ω|ω|, fitted without
+//!   bounds, negative with t < −[`SIGN_T`]) or the correlation is clear (below
+//!   [`POWER_CORRELATION`]). The free 1/J alone does not decide: a load cell that lags and holds
+//!   its samples turns it negative on steady plateaus (t = −11.9 on a real RCbenchmark log whose
+//!   torque·speed correlation is +0.97).
 //! - **the units of velocity and time**: Δω over a short window must equal ∫a·dt. The ratio
 //!   names the mistake: 60/2π = 9.549 is a velocity in rpm beside an acceleration in rad/s²,
 //!   1/2π a velocity in rev/s, 180/π one in deg/s, 10⁻³ a time column in milliseconds.
@@ -269,8 +271,10 @@ pub fn torque_sign(equations: &LoadEstimator<f64>) -> Option<Implausible> {
         Ok(s) if s.stderr[0] > 0.0 && s.stderr[0].is_finite() => s.theta[0] / s.stderr[0],
         _ => 0.0,
     };
+    // The power a propeller absorbs decides (a lagging load cell can turn the acceleration's
+    // fit negative on plateaus, never the power); the fit's sign settles a weak correlation.
     let flipped =
-        t_statistic < -SIGN_T || (t_statistic < SIGN_T && power_correlation < POWER_CORRELATION);
+        power_correlation < 0.0 && (t_statistic < -SIGN_T || power_correlation < POWER_CORRELATION);
     flipped.then_some(Implausible::TorqueSign {
         t_statistic,
         power_correlation,
