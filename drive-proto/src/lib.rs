@@ -45,6 +45,8 @@
 
 pub mod drive;
 pub mod excitation;
+pub mod feedback_loss;
+pub mod limits;
 pub mod machine;
 pub mod node;
 pub mod plant;

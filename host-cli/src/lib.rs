@@ -40,9 +40,31 @@ impl std::error::Error for CannotJudge {}
 /// Exit status of `propid diagnose` when the data cannot support a verdict.
 pub const EXIT_CANNOT_JUDGE: u8 = 3;
 
-/// The exit status for an error: 3 when the data cannot support a verdict, 2 for bad input,
-/// 1 otherwise.
+/// A limit stopped the rotor (`propid drive`): exit status 4.
+#[derive(Debug)]
+pub struct LimitStopped(pub String);
+
+impl std::fmt::Display for LimitStopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "stopped by a limit: {}", self.0)
+    }
+}
+
+impl std::error::Error for LimitStopped {}
+
+/// Exit status of `propid drive` when a limit stopped the rotor (soft start, maximum speed,
+/// speed watchdog).
+pub const EXIT_LIMIT: u8 = 4;
+
+/// The exit status for an error: 4 when a limit stopped the rotor, 3 when the data cannot
+/// support a verdict, 2 for bad input, 1 otherwise.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
+    if err
+        .chain()
+        .any(|e| e.downcast_ref::<LimitStopped>().is_some())
+    {
+        return EXIT_LIMIT;
+    }
     if err
         .chain()
         .any(|e| e.downcast_ref::<CannotJudge>().is_some())

@@ -15,9 +15,12 @@ use propid_drive_host::register_file::{self, parse_text, render_file};
 use propid_drive_host::stand::Played;
 use propid_drive_proto::drive::{drive_registers, Drive, DriveConfig, DriveEvent, Progress};
 use propid_drive_proto::excitation::Schedule;
+use propid_drive_proto::limits::{Limits, SoftStart};
 use propid_drive_proto::registers::{self, subject_register};
 use propid_drive_proto::settings::{
-    Deadman, InitDuration, PatternDuration, Period, RelativeError, SetpointPeriod, SetpointRange,
+    parse_speed, Deadman, InitDuration, MaxSpeed, PatternDuration, Period, RampDuration,
+    RelativeError, SetpointPeriod, SetpointRange, SoftStartDuration, SoftStartSetpoint,
+    WatchdogMargin,
 };
 use propid_drive_proto::{HostRegistry, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
@@ -79,6 +82,26 @@ pub struct Args {
     /// 0.005).
     #[arg(long)]
     pub setpoint_period: Option<f64>,
+    /// The highest speed the rotor may reach: rad/s, or rpm with `rpm` (`12000rpm`); 0: none
+    /// (register max_speed, MAX_SPEED; default none: set your propeller's rated speed).
+    #[arg(long, value_name = "SPEED", value_parser = speed_arg)]
+    pub max_speed: Option<f64>,
+    /// The soft start's setpoint, a ratiometric magnitude in (0, 1] applied in the direction of
+    /// hi (register soft_start_setpoint, SOFT_START_SETPOINT; default 0.1).
+    #[arg(long, value_name = "SETPOINT")]
+    pub soft_start_setpoint: Option<f64>,
+    /// How long the soft start lasts [s]; 0: none (register soft_start_duration,
+    /// SOFT_START_DURATION; default 1).
+    #[arg(long, value_name = "SECONDS")]
+    pub soft_start_duration: Option<f64>,
+    /// A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0:
+    /// none (register ramp_duration, RAMP_DURATION; default 0).
+    #[arg(long, value_name = "SECONDS")]
+    pub ramp_duration: Option<f64>,
+    /// The speed watchdog's margin: how far the speed may run past what the reported torque can
+    /// explain, rad/s or rpm; 0: off (register speed_watchdog, SPEED_WATCHDOG; default 50).
+    #[arg(long, value_name = "SPEED", value_parser = speed_arg)]
+    pub speed_watchdog: Option<f64>,
     /// Pattern after the init phase (the seed: sine).
     #[arg(long, default_value_t = Pattern::Sine)]
     pub pattern: Pattern,
@@ -186,6 +209,17 @@ impl Args {
         set("pattern_duration", self.pattern_duration.map(r64));
         set("init_duration", self.init_duration.map(r64));
         set("setpoint_period", self.setpoint_period.map(r64));
+        set(registers::MAX_SPEED, self.max_speed.map(r64));
+        set(
+            registers::SOFT_START_SETPOINT,
+            self.soft_start_setpoint.map(r64),
+        );
+        set(
+            registers::SOFT_START_DURATION,
+            self.soft_start_duration.map(r64),
+        );
+        set(registers::RAMP_DURATION, self.ramp_duration.map(r64));
+        set(registers::SPEED_WATCHDOG, self.speed_watchdog.map(r64));
         if let Some(text) = &self.setpoint_rat_lo_hi {
             let (lo, hi) = parse_lo_hi(text)?;
             set("setpoint_rat_lo_hi", Value::real64(&[lo, hi]));
@@ -262,6 +296,7 @@ impl Args {
             deadman: Deadman::new(self.deadman).map_err(|e| flag_error("deadman", e))?,
             fit: self.fit || until_rel_stderr.is_some(),
             until_rel_stderr,
+            limits: limits_of(&number)?,
         };
         Ok((cfg, r))
     }
@@ -272,11 +307,58 @@ impl Args {
     }
 }
 
-/// Sets one register from text; the error names `origin`.
+/// A speed flag: rad/s, or rpm with `rpm`.
+fn speed_arg(text: &str) -> Result<f64, String> {
+    parse_speed(text)
+        .ok_or_else(|| format!("`{text}` is not a speed: give rad/s (1256.6) or rpm (12000rpm)"))
+}
+
+/// The limits the registers hold (0: off), each checked.
+fn limits_of(number: &dyn Fn(&'static str) -> f64) -> Result<Limits, InputError> {
+    let positive = |name: &'static str| Some(number(name)).filter(|v| *v != 0.0);
+    let soft_start = match positive(registers::SOFT_START_DURATION) {
+        None => None,
+        Some(d) => Some(SoftStart {
+            setpoint: SoftStartSetpoint::new(number(registers::SOFT_START_SETPOINT))
+                .map_err(|e| flag_error(registers::SOFT_START_SETPOINT, e))?,
+            duration: SoftStartDuration::new(d)
+                .map_err(|e| flag_error(registers::SOFT_START_DURATION, e))?,
+        }),
+    };
+    Ok(Limits {
+        max_speed: positive(registers::MAX_SPEED)
+            .map(MaxSpeed::new)
+            .transpose()
+            .map_err(|e| flag_error(registers::MAX_SPEED, e))?,
+        soft_start,
+        ramp: positive(registers::RAMP_DURATION)
+            .map(RampDuration::new)
+            .transpose()
+            .map_err(|e| flag_error(registers::RAMP_DURATION, e))?,
+        watchdog: positive(registers::SPEED_WATCHDOG)
+            .map(WatchdogMargin::new)
+            .transpose()
+            .map_err(|e| flag_error(registers::SPEED_WATCHDOG, e))?,
+    })
+}
+
+/// Sets one register from text; the error names `origin`. Speed registers also take rpm.
 fn set_text(r: &mut HostRegistry, name: &str, text: &str, origin: &str) -> Result<(), InputError> {
     let current = r
         .get(name)
         .ok_or_else(|| InputError(format!("{origin}: no register named {name}")))?;
+    let converted;
+    let text = if [registers::MAX_SPEED, registers::SPEED_WATCHDOG].contains(&name) {
+        match parse_speed(text) {
+            Some(v) => {
+                converted = v.to_string();
+                converted.as_str()
+            }
+            None => text,
+        }
+    } else {
+        text
+    };
     let value = parse_text(&current.value, text).ok_or_else(|| {
         InputError(format!(
             "{origin}: `{text}` is not a valid {} for register {name}",
@@ -303,6 +385,17 @@ pub fn flag_error(setting: &str, problem: impl ToString) -> InputError {
         registers::PATTERN_DURATION => ("--pattern-duration", Some(registers::PATTERN_DURATION)),
         registers::INIT_DURATION => ("--init-duration", Some(registers::INIT_DURATION)),
         registers::SETPOINT_PERIOD => ("--setpoint-period", Some(registers::SETPOINT_PERIOD)),
+        registers::MAX_SPEED => ("--max-speed", Some(registers::MAX_SPEED)),
+        registers::SOFT_START_SETPOINT => (
+            "--soft-start-setpoint",
+            Some(registers::SOFT_START_SETPOINT),
+        ),
+        registers::SOFT_START_DURATION => (
+            "--soft-start-duration",
+            Some(registers::SOFT_START_DURATION),
+        ),
+        registers::RAMP_DURATION => ("--ramp-duration", Some(registers::RAMP_DURATION)),
+        registers::SPEED_WATCHDOG => ("--speed-watchdog", Some(registers::SPEED_WATCHDOG)),
         other => return InputError(format!("--{} {problem}", other.replace('_', "-"))),
     };
     match register {
@@ -332,6 +425,10 @@ pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
 /// Prints a drive's events on stderr (`progress` off: only the stop).
 pub fn print_event(event: &DriveEvent, excitation: &Excitation, progress: bool) {
     match event {
+        DriveEvent::SoftStartPassed(p) if progress => eprintln!(
+            "drive: soft start passed: {} feedback messages, the rotor went from {:.1} to {:.1} rad/s the commanded way",
+            p.messages, p.from, p.to
+        ),
         DriveEvent::PatternStarted if progress => eprintln!(
             "drive: pattern commenced ({}, {} s)",
             excitation.pattern, excitation.duration
@@ -473,6 +570,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         played,
         "propid drive",
     )?;
+    eprintln!("drive: {}", limits_line(&cfg));
     let drive = Drive::with_registers(
         cfg,
         &served,
@@ -520,6 +618,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "drive: stopped ({}); {delivered}; {} rows written; frames dropped {} (link busy {} times, {} setpoints superseded, {} refused by a full queue)",
         r.reason, r.rows, r.tx.dropped, r.tx.would_block, r.tx.superseded, r.tx.refused
     );
+    eprintln!("drive: {}", feedback_line(r));
+    eprintln!("drive: {}", priority_line(&outcome.link.priority));
     if let Some(e) = r.estimate.filter(|_| fit) {
         eprintln!(
             "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
@@ -534,7 +634,66 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
         StopReason::Signal => std::process::exit(130),
+        StopReason::Limit(limit) => Err(crate::LimitStopped(limit.to_string()).into()),
         reason => anyhow::bail!("{reason}"),
+    }
+}
+
+/// How much feedback was lost on its way during the recording, and where it was seen missing.
+pub fn feedback_line(r: &propid_drive_proto::drive::StopReport) -> String {
+    let l = r.feedback_lost;
+    let expected = r.rows + l.lost();
+    let share = if expected == 0 {
+        100.0
+    } else {
+        100.0 * r.rows as f64 / expected as f64
+    };
+    format!(
+        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames rejected by the reassembler",
+        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.dropped_transfers
+    )
+}
+
+/// The limits in force, said before the run.
+pub fn limits_line(cfg: &DriveConfig) -> String {
+    let l = &cfg.limits;
+    let hi = cfg.excitation.schedule().range.hi();
+    let mut parts = Vec::new();
+    match l.soft_start {
+        Some(s) => parts.push(format!(
+            "soft start at {:+} for {} s (feedback and the direction checked before any high torque)",
+            s.setpoint.get().min(hi.abs()).copysign(if hi < 0.0 { -1.0 } else { 1.0 }),
+            s.duration
+        )),
+        None => parts.push("no soft start".into()),
+    }
+    if let Some(r) = l.ramp {
+        parts.push(format!("a {r} s ramp to {hi}"));
+    }
+    match l.watchdog {
+        Some(w) => parts.push(format!("speed watchdog, margin {w} rad/s")),
+        None => parts.push("no speed watchdog".into()),
+    }
+    match l.max_speed {
+        Some(m) => parts.push(format!(
+            "maximum speed {m} rad/s ({:.0} rpm)",
+            m.get() / propid_drive_proto::settings::RAD_S_PER_RPM
+        )),
+        None => parts.push(
+            "no maximum speed (--max-speed: your propeller's rated speed, e.g. 12000rpm)".into(),
+        ),
+    }
+    format!("limits: {}", parts.join("; "))
+}
+
+/// The loop's scheduling priority, and how to get a real-time one where it was refused.
+pub fn priority_line(p: &propid_transport::priority::ThreadPriority) -> String {
+    if p.is_realtime() {
+        format!("the control loop and the serial reader ran at {p}")
+    } else {
+        format!(
+            "the control loop ran at {p}; on a busy machine it can wait for a CPU long enough to lose feedback (docs/TRANSPORTS.md); on Linux `sudo setcap cap_sys_nice+ep \"$(command -v propid)\"` lets it take a real-time priority"
+        )
     }
 }
 

@@ -106,9 +106,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )
         .map_err(anyhow::Error::msg)?;
     eprintln!(
-        "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {}",
+        "sim-drive: {} setpoints received, {} feedback published, {} feedback samples dropped unsent (not sent within {} s); last readiness {}, last setpoint {}",
         summary.setpoints,
         summary.feedback_published,
+        summary.feedback_dropped,
+        propid_drive_proto::sim_drive::FEEDBACK_HOLD.as_secs_f64(),
         summary.last_readiness.map_or("none", readiness_name),
         summary
             .last_setpoint
