@@ -1,10 +1,9 @@
 //! The one currency between the bus side and the science side: a [`Sample`] of the drive's
-//! dynamics (time, torque, velocity, acceleration, angle), and a [`Row`] of the recording (the
-//! sample and the host's receive time).
+//! dynamics (time, torque, velocity, acceleration, angle).
 //!
 //! ```text
-//!  DoF3rdTs (the drive's feedback message) ─► Sample::from ─► Row { ts_local, sample } ─► TSV
-//!  stand simulators, importers, replay ──────────────────────► Row ───────────────────────► TSV
+//!  DoF3rdTs (the drive's feedback message) ─► Sample::from ─► a row of the TSV (propid-io)
+//!  stand simulators, importers, replay ──────► Sample ──────► a row of the TSV
 //! ```
 //! Every producer (the driver, `replay`, the simulators, the importers) makes these, and every
 //! consumer (the TSV writer, the fit, the diagnosis, the live page) takes them. The field names
@@ -49,13 +48,4 @@ impl From<&DoF3rdTs> for Sample {
             position: f64::from(k.base.position),
         }
     }
-}
-
-/// A row of a recording: the sample plus the host's receive time, if known.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Row {
-    /// Host monotonic receive time [s] (NaN if unknown, e.g. a file without a `ts_local` column).
-    pub ts_local: f64,
-    /// The measurement.
-    pub sample: Sample,
 }

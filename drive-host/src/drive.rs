@@ -6,7 +6,7 @@ use std::sync::atomic::AtomicBool;
 
 use propid_drive_proto::drive::{Drive, DriveConfig, DriveEvent, StopReport};
 use propid_drive_proto::StopReason;
-use propid_io::tsv::TsvWriter;
+use propid_io::tsv::{Row, TsvWriter};
 use propid_transport::CanTransport;
 
 use crate::realtime::{run_realtime, Clock, RunOutcome};
@@ -63,7 +63,11 @@ pub fn run_drive_machine(
             }
             DriveEvent::Row(row) => {
                 if let Some(w) = writer.as_mut() {
-                    w.write(row).map_err(|e| e.to_string())?;
+                    let row = Row {
+                        ts_local: row.ts_local,
+                        sample: row.sample,
+                    };
+                    w.write(&row).map_err(|e| e.to_string())?;
                 }
             }
             DriveEvent::Stopped(r) => report = Some(r.clone()),

@@ -28,7 +28,7 @@ use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Value, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig, TxStats};
-use propid_core::sample::{Row, Sample};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
 
 use crate::excitation::Excitation;
@@ -105,36 +105,42 @@ impl DriveConfig {
     }
 }
 
-/// The drive's registers holding `cfg`'s values (what the node serves while it drives).
+/// The drive's registers holding `cfg`'s values (what the node serves while it drives). Every
+/// field is named: one added to [`DriveConfig`] does not compile here until it is served or said
+/// not to be a register.
 pub fn drive_registers(cfg: &DriveConfig, persistent: bool) -> HostRegistry {
+    let DriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        drive_node_id: _,
+        excitation,
+        setpoint_period,
+        deadman: _,
+        fit: _,
+        until_rel_stderr: _,
+        limits,
+    } = cfg;
     let mut r = registers::drive_defaults(persistent);
-    let s = cfg.excitation.schedule();
+    let s = excitation.schedule();
     let set = |r: &mut HostRegistry, name: &str, v: Value| {
         // The names are the defaults' and the types match them: cannot fail.
         let _ = r.set(name, &v);
     };
-    set(&mut r, NODE_ID, n16(Some(u16::from(cfg.node_id.get()))));
-    set(
-        &mut r,
-        SETPOINT_RAT_LO_HI,
-        real64(&[s.range.lo(), s.range.hi()]),
-    );
+    set(&mut r, NODE_ID, n16(Some(u16::from(node_id.get()))));
+    let range = [s.range.lo(), s.range.hi()];
+    set(&mut r, SETPOINT_RAT_LO_HI, real64(&range));
     set(&mut r, PERIOD, real64(&[s.period.get()]));
     set(&mut r, PATTERN_DURATION, real64(&[s.duration.get()]));
     set(&mut r, INIT_DURATION, real64(&[s.init_duration.get()]));
-    set(
-        &mut r,
-        SETPOINT_PERIOD,
-        real64(&[cfg.setpoint_period.get()]),
-    );
-    set(
-        &mut r,
-        DRIVE_READINESS_ID,
-        n16(cfg.readiness_id.map(SubjectId::get)),
-    );
-    set(&mut r, DRIVE_SETPOINT_ID, n16(Some(cfg.setpoint_id.get())));
-    set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(cfg.feedback_id.get())));
-    for (name, value) in registers::limit_values(&cfg.limits) {
+    set(&mut r, SETPOINT_PERIOD, real64(&[setpoint_period.get()]));
+    let readiness = n16(readiness_id.map(SubjectId::get));
+    set(&mut r, DRIVE_READINESS_ID, readiness);
+    set(&mut r, DRIVE_SETPOINT_ID, n16(Some(setpoint_id.get())));
+    set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(feedback_id.get())));
+    for (name, value) in registers::limit_values(limits) {
         set(&mut r, name, real64(&[value]));
     }
     r
@@ -235,6 +241,15 @@ impl StopReport {
     }
 }
 
+/// One feedback message as the drive received it: a row of the recording.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedbackRow {
+    /// When it arrived, on the caller's clock [s] (the TSV's `ts_local`).
+    pub ts_local: f64,
+    /// What it says (time from the drive's own timestamp).
+    pub sample: Sample,
+}
+
 /// What the drive reports while it runs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DriveEvent {
@@ -243,7 +258,7 @@ pub enum DriveEvent {
     /// The init phase is over and recording begins.
     PatternStarted,
     /// One feedback row: write it (and flush it) before the next.
-    Row(Row),
+    Row(FeedbackRow),
     /// Once a second during the pattern.
     Progress(Progress),
     /// The stop sequence began (STANDBY is first in line).
@@ -803,15 +818,12 @@ impl Drive {
         self.last_feedback = now;
         self.fed = true;
         let sample = Sample::from(&fb);
-        // The drive's clock where it stamps its feedback (a host that waited delivers a burst),
-        // else the time of arrival.
-        let t = if fb.timestamp.microsecond != 0 {
-            sample.t
-        } else {
-            now.as_secs_f64()
-        };
         let soft_start = (self.phase == Phase::SoftStart).then(|| self.soft_start_setpoint());
-        if let Some(limit) = self.guard.feedback(t, &sample, soft_start) {
+        let stamped = fb.timestamp.microsecond != 0;
+        if let Some(limit) = self
+            .guard
+            .feedback(&sample, stamped, now.as_secs_f64(), soft_start)
+        {
             self.stop(now, StopReason::Limit(limit));
             return;
         }
@@ -829,7 +841,7 @@ impl Drive {
                 self.recent.pop_front();
             }
             self.recent.push_back(sample);
-            self.events.push_back(DriveEvent::Row(Row {
+            self.events.push_back(DriveEvent::Row(FeedbackRow {
                 ts_local: timestamp.as_secs_f64(),
                 sample,
             }));

@@ -253,11 +253,21 @@ const TORQUE_GRACE: f64 = 0.05;
 /// A feedback gap longer than this [s] credits no more torque than this long.
 const MAX_STEP: f64 = 0.5;
 
+/// Which clock the watchdog's time is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TimeBase {
+    /// The drive's own timestamps (a burst after a host stall keeps its spacing).
+    Drive,
+    /// Arrival on the host (a drive that does not stamp its feedback).
+    Host,
+}
+
 /// The speed watchdog's state (see the module documentation).
 #[derive(Clone, Debug)]
 struct Watchdog {
     margin: f64,
     inertia_bound: Option<f64>,
+    base: Option<TimeBase>,
     /// Recent (time, torque).
     recent: VecDeque<(f64, f64)>,
     last_t: Option<f64>,
@@ -271,6 +281,7 @@ impl Watchdog {
         Watchdog {
             margin,
             inertia_bound: None,
+            base: None,
             recent: VecDeque::new(),
             last_t: None,
             credit: 0.0,
@@ -286,8 +297,34 @@ impl Watchdog {
         }
     }
 
-    fn feedback(&mut self, t: f64, velocity: f64, torque: f64) -> Option<LimitStop> {
-        if !(t.is_finite() && velocity.is_finite() && torque.is_finite()) {
+    /// One sample: the drive's time when it stamped it, the host's arrival time.
+    fn feedback(
+        &mut self,
+        drive_time: Option<f64>,
+        host_time: f64,
+        velocity: f64,
+        torque: f64,
+    ) -> Option<LimitStop> {
+        if !(velocity.is_finite() && torque.is_finite()) {
+            return None;
+        }
+        // The drive's clock once it has stamped a sample (a drive's clock starts at 0, which
+        // Cyphal reads as "unknown": such a sample moves no time on it).
+        let t = match (drive_time, self.base) {
+            (Some(t), Some(TimeBase::Drive)) => t,
+            (Some(t), _) => {
+                self.base = Some(TimeBase::Drive);
+                self.last_t = None;
+                self.recent.clear();
+                t
+            }
+            (None, Some(TimeBase::Drive)) => self.last_t.unwrap_or(0.0),
+            (None, _) => {
+                self.base = Some(TimeBase::Host);
+                host_time
+            }
+        };
+        if !t.is_finite() {
             return None;
         }
         let dt = match self.last_t {
@@ -345,8 +382,8 @@ impl Watchdog {
 pub struct Guard {
     limits: Limits,
     above_max: u32,
-    /// (time, velocity, torque) during the soft start.
-    soft: Vec<(f64, f64, f64)>,
+    /// (drive time if stamped, host time, velocity, torque) during the soft start.
+    soft: Vec<(Option<f64>, f64, f64, f64)>,
     watchdog: Option<Watchdog>,
 }
 
@@ -366,19 +403,22 @@ impl Guard {
         &self.limits
     }
 
-    /// One feedback sample at time `t` [s] (the drive's clock where it stamps, else the host's);
-    /// during the soft start, `soft_start` is its setpoint, and the sample is kept for its
-    /// verdict. A limit that trips is returned; the watchdog tripping during the soft start says
-    /// what the soft start would have said, sooner.
+    /// One feedback sample, received at `host_time` [s]; its time on the drive's clock is
+    /// `sample.t` when `stamped` (a drive that does not stamp sends 0, "unknown"). During the
+    /// soft start, `soft_start` is its setpoint, and the sample is kept for its verdict. A limit
+    /// that trips is returned; the watchdog tripping during the soft start says what the soft
+    /// start would have said, sooner.
     pub fn feedback(
         &mut self,
-        t: f64,
         sample: &Sample,
+        stamped: bool,
+        host_time: f64,
         soft_start: Option<f64>,
     ) -> Option<LimitStop> {
         let (velocity, torque) = (sample.velocity, sample.force);
+        let drive_time = stamped.then_some(sample.t);
         if soft_start.is_some() && velocity.is_finite() && torque.is_finite() {
-            self.soft.push((t, velocity, torque));
+            self.soft.push((drive_time, host_time, velocity, torque));
         }
         if let Some(max) = self.limits.max_speed {
             if velocity.abs() > max.get() {
@@ -393,7 +433,10 @@ impl Guard {
                 self.above_max = 0;
             }
         }
-        let trip = self.watchdog.as_mut()?.feedback(t, velocity, torque)?;
+        let trip = self
+            .watchdog
+            .as_mut()?
+            .feedback(drive_time, host_time, velocity, torque)?;
         Some(match (soft_start, &trip) {
             (Some(setpoint), LimitStop::Runaway { from, to, .. }) => {
                 if velocity * setpoint < 0.0 {
@@ -408,7 +451,7 @@ impl Guard {
                     let n = self.soft.len().max(1) as f64;
                     LimitStop::SoftStartTorqueReversed {
                         setpoint,
-                        torque: self.soft.iter().map(|x| x.2).sum::<f64>() / n,
+                        torque: self.soft.iter().map(|x| x.3).sum::<f64>() / n,
                     }
                 }
             }
@@ -424,7 +467,17 @@ impl Guard {
         subject: u16,
     ) -> Result<SoftStartPassed, LimitStop> {
         let seconds = self.limits.soft_start.map_or(0.0, |s| s.duration.get());
-        let soft = std::mem::take(&mut self.soft);
+        // On the drive's clock when it stamps (its first sample may say 0, "unknown"), else on
+        // the host's.
+        let stamped = self.soft.iter().any(|x| x.0.is_some());
+        let soft: Vec<(f64, f64, f64)> = std::mem::take(&mut self.soft)
+            .into_iter()
+            .filter_map(|(drive, host, w, tau)| match (stamped, drive) {
+                (true, Some(t)) => Some((t, w, tau)),
+                (true, None) => None,
+                (false, _) => Some((host, w, tau)),
+            })
+            .collect();
         let n = soft.len();
         if n < MIN_SOFT_START_MESSAGES {
             return Err(LimitStop::SoftStartNoFeedback {
@@ -489,5 +542,86 @@ impl Guard {
                 w.set_inertia_bound(j / MODEL_INERTIA_MARGIN);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(t: f64, velocity: f64, force: f64) -> Sample {
+        Sample {
+            t,
+            force,
+            velocity,
+            acceleration: 0.0,
+            position: 0.0,
+        }
+    }
+
+    /// A rotor of inertia `j` under `force`, 2 ms apart on the drive's clock, all arriving at the
+    /// same host time after a stall; the first stamped 0 ("unknown").
+    fn feed(guard: &mut Guard, j: f64, force: f64, n: usize) -> Option<LimitStop> {
+        (0..n).find_map(|k| {
+            let t = k as f64 * 0.002;
+            guard.feedback(&sample(t, force / j * t, force), k > 0, 7.0, None)
+        })
+    }
+
+    #[test]
+    fn a_burst_after_a_stall_is_judged_on_the_drives_clock() {
+        // 1 s of a correct rotor delivered at once: the drive's clock says it is all possible.
+        let mut g = Guard::new(Limits::DEFAULT);
+        g.model_inertia(2e-5, 1e-7);
+        assert_eq!(feed(&mut g, 2e-5, 0.05, 500), None);
+        // The same with a rotor 4 times lighter than the bound allows: a runaway.
+        let mut g = Guard::new(Limits::DEFAULT);
+        g.model_inertia(2e-5, 1e-7);
+        let trip = feed(&mut g, 2e-5 / 12.0, 0.05, 500).expect("a runaway");
+        let LimitStop::Runaway {
+            inertia_bound,
+            seconds,
+            ..
+        } = trip
+        else {
+            panic!("{trip:?}")
+        };
+        assert_eq!(inertia_bound, Some(2e-5 / 3.0));
+        // Growth of 2/3 of 7500 rad/s² per second past the bound: the 50 rad/s margin in ~10 ms.
+        assert!(seconds < 0.02, "{seconds}");
+    }
+
+    #[test]
+    fn an_imprecise_fit_sets_no_bound_and_the_torques_direction_decides() {
+        let mut g = Guard::new(Limits::DEFAULT);
+        g.model_inertia(2e-5, 2e-6); // 10 %: not used
+        // Any growth is possible while the torque pushes the rotation.
+        assert_eq!(feed(&mut g, 2e-6, 0.05, 500), None);
+        // Growth against the torque is not.
+        let mut g = Guard::new(Limits::DEFAULT);
+        let trip = feed(&mut g, -2e-5, 0.05, 500).expect("a runaway");
+        assert!(
+            matches!(trip, LimitStop::Runaway { inertia_bound: None, .. }),
+            "{trip:?}"
+        );
+    }
+
+    #[test]
+    fn the_maximum_speed_needs_two_samples_above_it() {
+        let mut g = Guard::new(Limits {
+            max_speed: Some(MaxSpeed::new(100.0).unwrap()),
+            ..Limits::OFF
+        });
+        let at = |v| sample(0.0, v, 0.01);
+        assert_eq!(g.feedback(&at(150.0), false, 0.0, None), None, "one spike");
+        assert_eq!(g.feedback(&at(90.0), false, 0.0, None), None);
+        assert_eq!(g.feedback(&at(-101.0), false, 0.0, None), None);
+        assert_eq!(
+            g.feedback(&at(-102.0), false, 0.0, None),
+            Some(LimitStop::MaxSpeed {
+                speed: 102.0,
+                max: 100.0
+            })
+        );
     }
 }

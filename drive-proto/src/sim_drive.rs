@@ -89,18 +89,29 @@ impl SimDriveConfig {
 
 /// The simulated Telega's registers for `cfg`, with local timestamps on or off.
 pub fn sim_drive_registers(cfg: &SimDriveConfig, local_timestamp: bool) -> HostRegistry {
+    // Every field named: one added to SimDriveConfig does not compile here until it is served or
+    // said not to be a register.
+    let SimDriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        interval,
+        duration: _,
+    } = cfg;
     let mut r = HostRegistry::new();
-    let node_id = n16(Some(u16::from(cfg.node_id.get())));
+    let node_id = n16(Some(u16::from(node_id.get())));
     add(&mut r, NODE_ID, node_id, true, true);
     add(&mut r, NODE_DESCRIPTION, text(""), true, true);
-    let interval = Value::real32(&[cfg.interval.get() as f32]).unwrap_or_default();
+    let interval = Value::real32(&[interval.get() as f32]).unwrap_or_default();
     add(&mut r, PUB_INTERVAL_MIN, interval, true, true);
     let ts = Value::bit(&[local_timestamp]).unwrap_or_default();
     add(&mut r, LOCAL_TIMESTAMP, ts, true, true);
     let deadman = Value::real32(&[SIM_DEADMAN.as_secs_f32()]).unwrap_or_default();
     add(&mut r, DEADMAN_TIMEOUT, deadman, false, true);
-    let (feedback, setpoint) = (cfg.feedback_id.get(), cfg.setpoint_id.get());
-    let readiness = cfg.readiness_id.map(SubjectId::get);
+    let (feedback, setpoint) = (feedback_id.get(), setpoint_id.get());
+    let readiness = readiness_id.map(SubjectId::get);
     port(
         &mut r,
         "pub",
@@ -144,11 +155,22 @@ pub struct SimDriveSummary {
     pub stores: u64,
 }
 
+/// A command the simulated drive received.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Command {
+    /// A readiness message.
+    Readiness(u8),
+    /// A setpoint (its first element).
+    Setpoint(f32),
+}
+
 /// What the simulated drive reports.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SimDriveEvent {
     /// A feedback message was queued for sending.
     Feedback(DoF3rdTs),
+    /// A readiness or setpoint message arrived (every one, in order).
+    Received(Command),
     /// The readiness received changed.
     Readiness(u8),
     /// A register was written over the bus and now holds `value` (a refused value, such as a
@@ -505,6 +527,8 @@ impl SimDrive {
                         self.plant.advance_to(t);
                     }
                     self.setpoint = f64::from(v.value[0]);
+                    self.events
+                        .push_back(SimDriveEvent::Received(Command::Setpoint(v.value[0])));
                     self.summary.last_setpoint = Some(v.value[0]);
                     self.summary.setpoints += 1;
                     self.last_setpoint_at = Some(now);
@@ -516,6 +540,8 @@ impl SimDrive {
                 ..
             }) if Some(subject_id) == readiness_id => {
                 if let Ok(r) = Readiness::deserialize(payload) {
+                    self.events
+                        .push_back(SimDriveEvent::Received(Command::Readiness(r.value)));
                     if self.summary.last_readiness != Some(r.value) {
                         self.summary.readiness_changes.push(r.value);
                         self.events.push_back(SimDriveEvent::Readiness(r.value));

@@ -160,7 +160,7 @@ fn accept_loop(
     shutdown: &Arc<AtomicBool>,
     title: &str,
 ) {
-    let page = live_page(title, token);
+    let page = live_page(title);
     for request in server.incoming_requests() {
         if shutdown.load(Ordering::Relaxed) {
             break;
@@ -212,95 +212,17 @@ fn accept_loop(
     }
 }
 
+/// The page's markup, style and application (files, included at build time).
+const LIVE_HTML: &str = include_str!("../assets/live/live.html");
+/// The live page's own style.
+const LIVE_CSS: &str = include_str!("../assets/live/live.css");
+/// The live page's application: reads the event stream, draws, sends STOP.
+const LIVE_JS: &str = include_str!("../assets/live/live.js");
+
 /// The page: uPlot charts fed by the event stream, the estimate, readiness, bus health, STOP.
-fn live_page(title: &str, token: &str) -> String {
-    let body = format!(
-        r##"<section>
-<div class="verdict" id="status">connecting…</div>
-<p><button id="stop" style="font-size:1.4em;padding:0.4em 1.6em;background:#c62828;color:#fff;border:0;border-radius:6px;cursor:pointer">STOP</button>
-&nbsp; readiness <b id="readiness">–</b></p>
-<table><tr><th>J [kg·m²]</th><th>c2 [N·m·s²/rad²]</th><th>feedback frames/s</th><th>sent frames/s</th><th>tx dropped</th><th>rx rejected</th><th>adapter errors</th></tr>
-<tr><td class="num" id="j">–</td><td class="num" id="c2">–</td><td class="num" id="rx">–</td><td class="num" id="tx">–</td><td class="num" id="drop">–</td><td class="num" id="rej">–</td><td class="num" id="aerr">–</td></tr></table>
-</section>
-<h3>setpoint and torque</h3><div class="chart" id="c-force"></div>
-<h3>velocity [rad/s]</h3><div class="chart" id="c-vel"></div>
-<h3>acceleration [rad/s²]</h3><div class="chart" id="c-acc"></div>
-<h3>running J (±2σ)</h3><div class="chart" id="c-j"></div>
-<h3>running c2 (±2σ)</h3><div class="chart" id="c-c2"></div>
-<script>
-const TOKEN = {token};
-const WINDOW_S = 10;
-const pts = {{t: [], sp: [], f: [], v: [], a: []}};
-const est = {{t: [], j: [], jlo: [], jhi: [], c2: [], clo: [], chi: []}};
-function mk(id, series) {{
-  const el = document.getElementById(id);
-  const width = Math.max(400, Math.min(1200, document.body.clientWidth - 40));
-  return new uPlot({{width, height: 200, series: [{{label: "t [s]"}}].concat(series),
-    scales: {{x: {{time: false}}}},
-    axes: [{{}}, {{size: 80, values: (u, vals) => vals.map(v => (v !== 0 && Math.abs(v) < 1e-2) ? v.toExponential(2) : v)}}]}}, [[]].concat(series.map(() => [])), el);
-}}
-const band = (label, colour) => [{{label, stroke: colour, width: 1.5}},
-  {{label: "−2σ", stroke: colour, dash: [4, 4], width: 1}}, {{label: "+2σ", stroke: colour, dash: [4, 4], width: 1}}];
-const charts = {{
-  force: mk("c-force", [{{label: "setpoint ×0.1", stroke: "#888", width: 1}}, {{label: "torque [N·m]", stroke: "#1f77b4", width: 1.5}}]),
-  vel: mk("c-vel", [{{label: "velocity", stroke: "#2ca02c", width: 1.5}}]),
-  acc: mk("c-acc", [{{label: "acceleration", stroke: "#d62728", width: 1}}]),
-  j: mk("c-j", band("J", "#9467bd")),
-  c2: mk("c-c2", band("c2", "#ff7f0e")),
-}};
-const fmt = (x) => (x === null || x === undefined || !isFinite(x)) ? "–" : x.toExponential(4);
-function redraw() {{
-  const n = pts.t.length;
-  if (n > 0) {{
-    const t0 = pts.t[n - 1] - WINDOW_S;
-    let i = 0; while (i < n && pts.t[i] < t0) i++;
-    for (const k in pts) pts[k].splice(0, i);
-  }}
-  charts.force.setData([pts.t, pts.sp.map(x => x * 0.1), pts.f]);
-  charts.vel.setData([pts.t, pts.v]);
-  charts.acc.setData([pts.t, pts.a]);
-  charts.j.setData([est.t, est.j, est.jlo, est.jhi]);
-  charts.c2.setData([est.t, est.c2, est.clo, est.chi]);
-}}
-let last = 0;
-const source = new EventSource("/events?token=" + TOKEN);
-// Once STOP is acknowledged, an update still in flight from before it (status "running") must
-// not take the acknowledgement off the page; the drive's final status replaces it.
-let stopping = false;
-source.onmessage = (ev) => {{
-  const u = JSON.parse(ev.data);
-  for (const p of u.points) {{
-    pts.t.push(p.t); pts.sp.push(p.setpoint); pts.f.push(p.force); pts.v.push(p.velocity); pts.a.push(p.acceleration);
-  }}
-  for (const e of u.estimates) {{
-    est.t.push(e.t); est.j.push(e.j); est.jlo.push(e.j - 2 * e.j_stderr); est.jhi.push(e.j + 2 * e.j_stderr);
-    est.c2.push(e.c2); est.clo.push(e.c2 - 2 * e.c2_stderr); est.chi.push(e.c2 + 2 * e.c2_stderr);
-  }}
-  last = u.seq;
-  if (!stopping || u.finished) document.getElementById("status").textContent = u.status || "running";
-  document.getElementById("readiness").textContent = u.readiness || "–";
-  const e = est.j.length ? est.j.length - 1 : -1;
-  document.getElementById("j").textContent = e >= 0 ? fmt(est.j[e]) + " ± " + fmt((est.jhi[e] - est.j[e]) / 2) : "–";
-  document.getElementById("c2").textContent = e >= 0 ? fmt(est.c2[e]) + " ± " + fmt((est.chi[e] - est.c2[e]) / 2) : "–";
-  const num = (x) => (x === null || x === undefined || !isFinite(x)) ? "–" : x.toFixed(0);
-  document.getElementById("rx").textContent = num(u.bus.frames_rx_per_s);
-  document.getElementById("tx").textContent = num(u.bus.frames_tx_per_s);
-  document.getElementById("drop").textContent = u.bus.tx_dropped;
-  document.getElementById("rej").textContent = u.bus.rx_rejected;
-  document.getElementById("aerr").textContent = u.bus.adapter_errors;
-  document.body.dataset.samples = String(last);
-  document.body.dataset.finished = String(u.finished);
-  redraw();
-}};
-document.getElementById("stop").onclick = async () => {{
-  const r = await fetch("/stop", {{method: "POST", headers: {{"X-Propid-Token": TOKEN}}}});
-  stopping = r.ok;
-  document.getElementById("status").textContent = await r.text();
-}};
-</script>
-"##,
-        token = crate::html::json_string(token),
-    );
+/// The same for every run: the script reads the token from the page's address.
+fn live_page(title: &str) -> String {
+    let body = format!("<style>{LIVE_CSS}</style>\n{LIVE_HTML}<script>\n{LIVE_JS}</script>\n");
     crate::html::page(title, &[body])
 }
 

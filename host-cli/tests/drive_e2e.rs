@@ -217,7 +217,7 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
         (&[("SETPOINT_RAT_LO_HI", "0.1 1.5")], "lo < hi ≤ 1"),
         (
             &[("UAVCAN__SUB__FB_DYN__ID", "")],
-            "--feedback-id (register uavcan.sub.fb_dyn.id, UAVCAN__SUB__FB_DYN__ID) is not set",
+            "--feedback-id is not set (nor its register uavcan.sub.fb_dyn.id in a --registers file, nor its environment variable UAVCAN__SUB__FB_DYN__ID)",
         ),
         (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
     ];

@@ -330,9 +330,16 @@ pub fn replay(
             summary.undecodable += 1;
             continue;
         };
+        let kin = &fb.value.kinematics;
         if let Err(e) = writer.write(&Row {
             ts_local: ts,
-            sample: Sample::from(&fb),
+            sample: Sample {
+                t: fb.timestamp.microsecond as f64 * 1e-6,
+                force: f64::from(fb.value.force),
+                velocity: f64::from(kin.base.velocity),
+                acceleration: f64::from(kin.acceleration),
+                position: f64::from(kin.base.position),
+            },
         }) {
             break Err(e.into());
         }

@@ -8,7 +8,16 @@
 
 use std::io::{BufRead, Write};
 
-pub use propid_core::sample::{Row, Sample};
+pub use propid_core::sample::Sample;
+
+/// A TSV row: the sample plus the host's receive time, if the file has it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Row {
+    /// Host monotonic receive time [s] (NaN if the file has no `ts_local` column).
+    pub ts_local: f64,
+    /// The measurement.
+    pub sample: Sample,
+}
 
 /// The header `propid` writes.
 pub const HEADER: [&str; 6] = [

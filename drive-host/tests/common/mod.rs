@@ -7,10 +7,10 @@ use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
-use propid_core::sample::{Row, Sample};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
 use propid_drive_host::stand::StandPlant;
-use propid_drive_proto::drive::{Drive, DriveConfig, DriveEvent, Phase, StopReport};
+use propid_drive_proto::drive::{Drive, DriveConfig, DriveEvent, FeedbackRow, Phase, StopReport};
 use propid_drive_proto::plant::Plant;
 use propid_drive_proto::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
 use propid_drive_proto::virtual_link::{LinkModel, VirtualLink};
@@ -46,7 +46,7 @@ pub fn stand() -> Box<dyn Plant> {
 /// Everything a run produced.
 #[derive(Default)]
 pub struct Run {
-    pub rows: Vec<Row>,
+    pub rows: Vec<FeedbackRow>,
     /// (time [µs], event) of phase events.
     pub phases: Vec<(u64, &'static str)>,
     pub report: Option<StopReport>,

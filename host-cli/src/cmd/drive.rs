@@ -1,5 +1,5 @@
-//! `propid drive`: argument parsing, the signal handlers, progress lines and exit codes around
-//! [`propid_drive_host::drive::run_drive`].
+//! `propid drive`: the seed's settings checked (flags, environment, register file), the signal
+//! handlers, progress lines and exit codes around [`propid_drive_host::drive::run_drive`].
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -7,418 +7,539 @@ use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anyhow::Context;
-use propid_core::can::{Mtu, NodeId, SubjectId};
+use propid_core::can::{NodeId, SubjectId};
 use propid_core::dsdl::Value;
 use propid_drive_host::drive::run_drive_machine;
-use propid_drive_host::realtime::SystemClock;
-use propid_drive_host::register_file::{self, parse_text, render_file};
+use propid_drive_host::realtime::{Clock, SystemClock};
+use propid_drive_host::register_file::render_file;
 use propid_drive_host::stand::Played;
 use propid_drive_proto::drive::{drive_registers, Drive, DriveConfig, DriveEvent, Progress};
 use propid_drive_proto::excitation::Schedule;
 use propid_drive_proto::limits::{Limits, SoftStart};
-use propid_drive_proto::registers::{self, subject_register};
+use propid_drive_proto::registers::{self, NODE_DESCRIPTION};
 use propid_drive_proto::settings::{
-    parse_speed, Deadman, InitDuration, MaxSpeed, PatternDuration, Period, RampDuration,
-    RelativeError, SetpointPeriod, SetpointRange, SoftStartDuration, SoftStartSetpoint,
-    WatchdogMargin,
+    parse_speed, Deadman, InitDuration, MaxSpeed, PatternDuration, Period, RampDuration, Range,
+    RangeError, RelativeError, SetpointPeriod, SetpointRange, SoftStartDuration, SoftStartSetpoint,
+    WatchdogMargin, RAD_S_PER_RPM,
 };
 use propid_drive_proto::{HostRegistry, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
+use crate::bus::{Bus, BusArgs};
+use crate::settings::{
+    command_args, environment, fill, number, numbers, setpoint_range, setting, ConfigError,
+    ConfigErrors, Names, Problem, RegisterFile,
+};
 use crate::InputError;
 
-/// Arguments of `propid drive`. The seed's settings are registers (docs/REGISTERS.md): each
-/// comes from its default, then the `--registers` file, then its environment variable (the
-/// register's name as PyCyphal maps it, e.g. `SETPOINT_RAT_LO_HI`, `UAVCAN__NODE__ID`), then the
-/// flag; the node serves them over uavcan.register.List/Access while it drives.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// This node's ID (register uavcan.node.id, UAVCAN__NODE__ID).
-    #[arg(long)]
-    pub node_id: Option<NodeId>,
-    /// The bus.
-    #[command(flatten)]
-    pub bus: crate::bus::BusArgs,
-    /// A register file: `name: value` lines (values as the environment variables take them),
-    /// read before the environment and the flags; registers written over the bus are saved to it.
-    #[arg(long, value_name = "FILE")]
-    pub registers: Option<PathBuf>,
-    /// Take the port-IDs from the drive's own registers (uavcan.pub.dynamics.id,
-    /// uavcan.sub.setpoint_r_torq.id, uavcan.sub.readiness.id) and refuse to engage it when its
-    /// configuration would spoil the data (see `propid telega`).
-    #[arg(long, value_name = "NODE")]
-    pub from_telega: Option<NodeId>,
-    /// Print the registers (defaults, file, environment and flags applied and checked) in the
-    /// register file's format, and exit without opening the bus.
-    #[arg(long)]
-    pub show_registers: bool,
-    /// Subject-ID of the readiness publisher; no readiness is published when unset
-    /// (uavcan.pub.readiness.id, UAVCAN__PUB__READINESS__ID).
-    #[arg(long)]
-    pub readiness_id: Option<SubjectId>,
-    /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id,
-    /// UAVCAN__PUB__SP_RAT__ID).
-    #[arg(long)]
-    pub setpoint_id: Option<SubjectId>,
-    /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id,
-    /// UAVCAN__SUB__FB_DYN__ID).
-    #[arg(long)]
-    pub feedback_id: Option<SubjectId>,
-    /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi,
-    /// SETPOINT_RAT_LO_HI; default "0.1 0.9").
-    #[arg(long)]
-    pub setpoint_rat_lo_hi: Option<String>,
-    /// Period of the sinusoid [s] (register period, PERIOD; default 2).
-    #[arg(long)]
-    pub period: Option<f64>,
-    /// Duration of the pattern [s] (register pattern_duration, PATTERN_DURATION; default 200).
-    #[arg(long)]
-    pub pattern_duration: Option<f64>,
-    /// Duration of the initial run at the high setpoint [s] (register init_duration,
-    /// INIT_DURATION; default 5).
-    #[arg(long)]
-    pub init_duration: Option<f64>,
-    /// Setpoint publication period [s] (register setpoint_period, SETPOINT_PERIOD; default
-    /// 0.005).
-    #[arg(long)]
-    pub setpoint_period: Option<f64>,
-    /// The highest speed the rotor may reach: rad/s, or rpm with `rpm` (`12000rpm`); 0: none
-    /// (register max_speed, MAX_SPEED; default none: set your propeller's rated speed).
-    #[arg(long, value_name = "SPEED", value_parser = speed_arg)]
-    pub max_speed: Option<f64>,
-    /// The soft start's setpoint, a ratiometric magnitude in (0, 1] applied in the direction of
-    /// hi (register soft_start_setpoint, SOFT_START_SETPOINT; default 0.1).
-    #[arg(long, value_name = "SETPOINT")]
-    pub soft_start_setpoint: Option<f64>,
-    /// How long the soft start lasts [s]; 0: none (register soft_start_duration,
-    /// SOFT_START_DURATION; default 1).
-    #[arg(long, value_name = "SECONDS")]
-    pub soft_start_duration: Option<f64>,
-    /// A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0:
-    /// none (register ramp_duration, RAMP_DURATION; default 0).
-    #[arg(long, value_name = "SECONDS")]
-    pub ramp_duration: Option<f64>,
-    /// The speed watchdog's margin: how far the speed may run past what the reported torque can
-    /// explain, rad/s or rpm; 0: off (register speed_watchdog, SPEED_WATCHDOG; default 50).
-    #[arg(long, value_name = "SPEED", value_parser = speed_arg)]
-    pub speed_watchdog: Option<f64>,
-    /// Pattern after the init phase (the seed: sine).
-    #[arg(long, default_value_t = Pattern::Sine)]
-    pub pattern: Pattern,
-    /// Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s].
-    #[arg(long, default_value_t = 0.5)]
-    pub deadman: f64,
-    /// Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of
-    /// the first feedback message).
-    #[arg(long)]
-    pub drive_node_id: Option<NodeId>,
-    /// Print the running estimate of J, c1, c2 on stderr while driving.
-    #[arg(long)]
-    pub fit: bool,
-    /// Write the TSV here instead of standard output.
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-    /// Progress on stderr once a second.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    pub progress: bool,
-    /// Play a pattern file from `propid plan` (its range, period and duration) instead of
-    /// --pattern, --period and the setpoint range.
-    #[arg(long)]
-    pub pattern_file: Option<PathBuf>,
-    /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
-    /// most this many percent; the pattern duration is then the longest the run may take.
-    #[arg(long, value_name = "PCT")]
-    pub until_stderr: Option<f64>,
-    /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
-    /// address (loopback; the URL with its per-run token is printed on stderr).
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    pub live: Option<String>,
-    /// Allow --live on an address other than loopback (anyone who can reach it and has the token
-    /// can stop the drive).
-    #[arg(long)]
-    pub live_allow_remote: bool,
+setting! {
+    /// This node's ID.
+    NodeIdSetting: Option<NodeId> =
+        Names::register("node-id", registers::NODE_ID, "UAVCAN__NODE__ID"),
+        "This node's ID",
+        crate::settings::node_id;
+}
+setting! {
+    /// This node's description (register and environment only).
+    Description: String = Names {
+        flag: None,
+        register: Some(NODE_DESCRIPTION),
+        env: Some("UAVCAN__NODE__DESCRIPTION"),
+    },
+        "This node's description",
+        |text: &str| Ok(text.to_string());
+}
+setting! {
+    /// The readiness publisher's subject.
+    ReadinessId: Option<SubjectId> =
+        Names::register("readiness-id", registers::DRIVE_READINESS_ID, "UAVCAN__PUB__READINESS__ID"),
+        "Subject-ID of the readiness publisher; none is published when unset",
+        crate::settings::subject_id;
+}
+setting! {
+    /// The setpoint publisher's subject.
+    SetpointId: Option<SubjectId> =
+        Names::register("setpoint-id", registers::DRIVE_SETPOINT_ID, "UAVCAN__PUB__SP_RAT__ID"),
+        "Subject-ID of the ratiometric setpoint publisher",
+        crate::settings::subject_id;
+}
+setting! {
+    /// The feedback subscriber's subject.
+    FeedbackId: Option<SubjectId> =
+        Names::register("feedback-id", registers::DRIVE_FEEDBACK_ID, "UAVCAN__SUB__FB_DYN__ID"),
+        "Subject-ID of the dynamics feedback subscriber",
+        crate::settings::subject_id;
+}
+setting! {
+    /// The setpoint range.
+    LoHi: SetpointRange =
+        Names::register("setpoint-rat-lo-hi", registers::SETPOINT_RAT_LO_HI, "SETPOINT_RAT_LO_HI"),
+        "Setpoint range \"LO HI\", ratiometric, -1 ≤ LO < HI ≤ 1 [default: 0.1 0.9]",
+        setpoint_range;
+}
+setting! {
+    /// The pattern's period.
+    PeriodSetting: Period = Names::register("period", registers::PERIOD, "PERIOD"),
+        "Period of the sinusoid [s] [default: 2]",
+        |text: &str| number(text, Period::new);
+}
+setting! {
+    /// The pattern's duration.
+    PatternDurationSetting: PatternDuration =
+        Names::register("pattern-duration", registers::PATTERN_DURATION, "PATTERN_DURATION"),
+        "Duration of the pattern [s] [default: 200]",
+        |text: &str| number(text, PatternDuration::new);
+}
+setting! {
+    /// The init phase's duration.
+    InitDurationSetting: InitDuration =
+        Names::register("init-duration", registers::INIT_DURATION, "INIT_DURATION"),
+        "Duration of the initial run at the high setpoint [s] [default: 5]",
+        |text: &str| number(text, InitDuration::new);
+}
+setting! {
+    /// The setpoint publication period.
+    SetpointPeriodSetting: SetpointPeriod =
+        Names::register("setpoint-period", registers::SETPOINT_PERIOD, "SETPOINT_PERIOD"),
+        "Setpoint publication period [s] [default: 0.005]",
+        |text: &str| number(text, SetpointPeriod::new);
+}
+setting! {
+    /// The deadman timeout.
+    DeadmanSetting: Deadman = Names::flag("deadman"),
+        "Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s] [default: 0.5]",
+        |text: &str| number(text, Deadman::new);
+}
+setting! {
+    /// The drive whose heartbeat is watched.
+    DriveNodeId: NodeId = Names::flag("drive-node-id"),
+        "Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of the first feedback message)",
+        |text: &str| text.parse::<NodeId>().map_err(Problem::Id);
+}
+setting! {
+    /// The precision to stop at.
+    UntilStderr: RelativeError = Names::flag("until-stderr"),
+        "Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at most this many percent; the pattern duration is then the longest the run may take",
+        |text: &str| {
+            let percent = Range { lo: 0.0, lo_open: true, hi: 100.0, hi_open: true, unit: "%" };
+            let p = crate::settings::seconds_in(text, percent)?;
+            RelativeError::new(p / 100.0).map_err(|_| Problem::Range(RangeError { range: percent, got: p }))
+        };
 }
 
-fn n16(v: u16) -> Value {
-    Value::natural16(&[v]).unwrap_or_default()
+/// What a speed's text must be.
+const SPEED: &str = "speed in rad/s, or rpm (12000rpm)";
+
+/// A speed (rad/s, or rpm), 0 for none, made into `make`'s type.
+fn speed_or_none<T>(
+    text: &str,
+    make: fn(f64) -> Result<T, RangeError>,
+) -> Result<Option<T>, Problem> {
+    let v = parse_speed(text).ok_or_else(|| Problem::Type {
+        text: text.to_string(),
+        ty: SPEED,
+    })?;
+    if v == 0.0 {
+        return Ok(None);
+    }
+    make(v).map(Some).map_err(Problem::Range)
 }
 
-fn r64(v: f64) -> Value {
-    Value::real64(&[v]).unwrap_or_default()
+/// Seconds, 0 for none, made into `make`'s type.
+fn seconds_or_none<T>(
+    text: &str,
+    make: fn(f64) -> Result<T, RangeError>,
+) -> Result<Option<T>, Problem> {
+    let [v] = numbers::<1>(text)?;
+    if v == 0.0 {
+        return Ok(None);
+    }
+    make(v).map(Some).map_err(Problem::Range)
+}
+
+setting! {
+    /// The highest speed allowed.
+    MaxSpeedSetting: Option<MaxSpeed> =
+        Names::register("max-speed", registers::MAX_SPEED, "MAX_SPEED"),
+        "The highest speed the rotor may reach: rad/s, or rpm (12000rpm); 0: none [default: none: give your propeller's rated speed]",
+        |text: &str| speed_or_none(text, MaxSpeed::new);
+}
+setting! {
+    /// The soft start's setpoint.
+    SoftStartSetpointSetting: SoftStartSetpoint =
+        Names::register("soft-start-setpoint", registers::SOFT_START_SETPOINT, "SOFT_START_SETPOINT"),
+        "The soft start's setpoint: a ratiometric magnitude in (0, 1], applied in the direction of hi, at most |hi| [default: 0.1]",
+        |text: &str| number(text, SoftStartSetpoint::new);
+}
+setting! {
+    /// The soft start's duration.
+    SoftStartDurationSetting: Option<SoftStartDuration> =
+        Names::register("soft-start-duration", registers::SOFT_START_DURATION, "SOFT_START_DURATION"),
+        "How long the soft start lasts before the init phase [s]; feedback must arrive and the rotor speed up the commanded way; 0: no soft start [default: 1]",
+        |text: &str| seconds_or_none(text, SoftStartDuration::new);
+}
+setting! {
+    /// The ramp's duration.
+    RampDurationSetting: Option<RampDuration> =
+        Names::register("ramp-duration", registers::RAMP_DURATION, "RAMP_DURATION"),
+        "A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0: none [default: 0]",
+        |text: &str| seconds_or_none(text, RampDuration::new);
+}
+setting! {
+    /// The speed watchdog's margin.
+    SpeedWatchdogSetting: Option<WatchdogMargin> =
+        Names::register("speed-watchdog", registers::SPEED_WATCHDOG, "SPEED_WATCHDOG"),
+        "The speed watchdog: how far the speed may run past what the reported torque can drive it, rad/s or rpm; 0: off [default: 50]",
+        |text: &str| speed_or_none(text, WatchdogMargin::new);
+}
+
+command_args! {
+    /// Arguments of `propid drive`. The seed's settings are registers (docs/REGISTERS.md): each
+    /// comes from its default, then the `--registers` file, then its environment variable (the
+    /// register's name as PyCyphal maps it, e.g. `SETPOINT_RAT_LO_HI`, `UAVCAN__NODE__ID`), then
+    /// the flag; the node serves them over uavcan.register.List/Access while it drives.
+    pub struct Args {
+        settings {
+            node_id: NodeIdSetting as "ID",
+            readiness_id: ReadinessId as "ID",
+            setpoint_id: SetpointId as "ID",
+            feedback_id: FeedbackId as "ID",
+            setpoint_rat_lo_hi: LoHi as "LO HI",
+            period: PeriodSetting as "S",
+            pattern_duration: PatternDurationSetting as "S",
+            init_duration: InitDurationSetting as "S",
+            setpoint_period: SetpointPeriodSetting as "S",
+            deadman: DeadmanSetting as "S",
+            drive_node_id: DriveNodeId as "ID",
+            until_stderr: UntilStderr as "PCT",
+            max_speed: MaxSpeedSetting as "SPEED",
+            soft_start_setpoint: SoftStartSetpointSetting as "SETPOINT",
+            soft_start_duration: SoftStartDurationSetting as "S",
+            ramp_duration: RampDurationSetting as "S",
+            speed_watchdog: SpeedWatchdogSetting as "SPEED",
+        }
+        registers {
+            description: Description,
+        }
+        nested {
+            bus: BusArgs,
+        }
+        /// A register file: `name: value` lines (values as the environment variables take them),
+        /// read before the environment and the flags; registers written over the bus are saved
+        /// to it.
+        #[arg(long, value_name = "FILE")]
+        pub registers: Option<PathBuf>,
+        /// Take the port-IDs from the drive's own registers (uavcan.pub.dynamics.id,
+        /// uavcan.sub.setpoint_r_torq.id, uavcan.sub.readiness.id) and refuse to engage it when
+        /// its configuration would spoil the data (see `propid telega`).
+        #[arg(long, value_name = "NODE")]
+        pub from_telega: Option<NodeId>,
+        /// Print the registers (defaults, file, environment and flags applied and checked) in the
+        /// register file's format, and exit without opening the bus.
+        #[arg(long)]
+        pub show_registers: bool,
+        /// Pattern after the init phase (the seed: sine).
+        #[arg(long, default_value_t = Pattern::Sine)]
+        pub pattern: Pattern,
+        /// Print the running estimate of J, c1, c2 on stderr while driving.
+        #[arg(long)]
+        pub fit: bool,
+        /// Write the TSV here instead of standard output.
+        #[arg(short, long)]
+        pub output: Option<PathBuf>,
+        /// Progress on stderr once a second.
+        #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+        pub progress: bool,
+        /// Play a pattern file from `propid plan` (its range, period and duration) instead of
+        /// --pattern, --period and the setpoint range.
+        #[arg(long)]
+        pub pattern_file: Option<PathBuf>,
+        /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on
+        /// this address (loopback; the URL with its per-run token is printed on stderr).
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+        pub live: Option<String>,
+        /// Allow --live on an address other than loopback (anyone who can reach it and has the
+        /// token can stop the drive).
+        #[arg(long)]
+        pub live_allow_remote: bool,
+    }
+}
+
+/// `propid drive`'s arguments with the environment and the register file filled in, and what
+/// was wrong on the way (a register file that cannot be read, lines that are not registers).
+pub struct Raw {
+    /// The arguments.
+    pub args: Args,
+    /// Errors so far.
+    pub errors: ConfigErrors,
 }
 
 impl Args {
-    /// The registers: defaults, then the register file, then the environment (`vars`), then
-    /// the flags. A value that does not parse is refused naming its origin and register.
-    pub fn registers(
-        &self,
-        vars: impl IntoIterator<Item = (String, String)>,
-    ) -> Result<HostRegistry, InputError> {
-        let mut r = registers::drive_defaults(self.registers.is_some());
-        if let Some(path) = &self.registers {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                InputError(format!(
-                    "cannot read the register file {}: {e}",
-                    path.display()
-                ))
-            })?;
-            let (entries, errors) = register_file::read_entries(&text);
-            if let Some(e) = errors.first() {
-                return Err(InputError(format!("{}:{}: {e}", path.display(), e.line)));
-            }
-            for e in entries {
-                let origin = format!("{}:{}", path.display(), e.line);
-                set_text(&mut r, &e.name, &e.value, &origin)?;
-            }
-        }
-        let vars: Vec<(String, String)> = vars.into_iter().collect();
-        let names: Vec<String> = r
+    /// These arguments with the environment (`vars`) and the register file filled in.
+    pub fn raw(mut self, vars: &std::collections::HashMap<String, String>) -> Raw {
+        let mut errors = ConfigErrors::default();
+        let file = self
+            .registers
+            .as_deref()
+            .and_then(|p| RegisterFile::read(p, &mut errors));
+        // Served but not settings: the ports' `.type` registers.
+        let defaults = registers::drive_defaults(false);
+        let read_only: Vec<&str> = defaults
             .iter()
-            .filter(|x| x.mutable)
-            .filter_map(|x| x.name.as_str().map(String::from))
+            .filter(|r| !r.mutable)
+            .filter_map(|r| r.name.as_str())
             .collect();
-        for name in names {
-            let var = registers::environment_name(&name);
-            if let Some((_, value)) = vars.iter().find(|(k, _)| *k == var) {
-                set_text(&mut r, &name, value, &format!("environment variable {var}"))?;
-            }
-        }
-        let mut set = |name: &str, v: Option<Value>| {
-            if let Some(v) = v {
-                // The flags are typed: the conversion to the register's type cannot fail.
-                let _ = r.set(name, &v);
-            }
-        };
-        set(
-            "uavcan.node.id",
-            self.node_id.map(|id| n16(u16::from(id.get()))),
-        );
-        set(
-            registers::DRIVE_READINESS_ID,
-            self.readiness_id.map(|id| n16(id.get())),
-        );
-        set(
-            registers::DRIVE_SETPOINT_ID,
-            self.setpoint_id.map(|id| n16(id.get())),
-        );
-        set(
-            registers::DRIVE_FEEDBACK_ID,
-            self.feedback_id.map(|id| n16(id.get())),
-        );
-        set("period", self.period.map(r64));
-        set("pattern_duration", self.pattern_duration.map(r64));
-        set("init_duration", self.init_duration.map(r64));
-        set("setpoint_period", self.setpoint_period.map(r64));
-        set(registers::MAX_SPEED, self.max_speed.map(r64));
-        set(
-            registers::SOFT_START_SETPOINT,
-            self.soft_start_setpoint.map(r64),
-        );
-        set(
-            registers::SOFT_START_DURATION,
-            self.soft_start_duration.map(r64),
-        );
-        set(registers::RAMP_DURATION, self.ramp_duration.map(r64));
-        set(registers::SPEED_WATCHDOG, self.speed_watchdog.map(r64));
-        if let Some(text) = &self.setpoint_rat_lo_hi {
-            let (lo, hi) = parse_lo_hi(text)?;
-            set("setpoint_rat_lo_hi", Value::real64(&[lo, hi]));
-        }
-        Ok(r)
+        fill(&mut self, vars, file.as_ref(), &read_only, &mut errors);
+        Raw { args: self, errors }
     }
 
-    /// The validated configuration these arguments, the register file and the environment
-    /// (`vars`) describe, and the registers the drive will serve.
-    pub fn config_with(
-        &self,
-        vars: impl IntoIterator<Item = (String, String)>,
-    ) -> Result<(DriveConfig, HostRegistry), InputError> {
-        let r = self.registers(vars)?;
-        let until_rel_stderr = match self.until_stderr {
-            Some(p) => Some(RelativeError::new(p / 100.0).map_err(|_| {
-                InputError(format!(
-                    "--until-stderr must be a percentage in (0, 100) (got {p})"
-                ))
-            })?),
-            None => None,
-        };
-        let first = |name: &str| r.get(name).and_then(|x| x.value.float_at(0));
-        let number = |name: &'static str| first(name).unwrap_or(f64::NAN);
-        let node_id = match first(registers::NODE_ID) {
-            Some(v) if v < f64::from(registers::UNSET) => {
-                Some(NodeId::try_from(v as u64).map_err(|e| flag_error(registers::NODE_ID, e))?)
-            }
-            _ => None,
-        }
-        .ok_or_else(|| flag_error(registers::NODE_ID, "is not set"))?;
-        let port = |name: &'static str, required: bool| match subject_register(&r, name)
-            .map_err(|e| flag_error(name, e))?
-        {
-            None if required && self.from_telega.is_none() => Err(flag_error(name, "is not set")),
-            id => Ok(id),
-        };
-        let setpoint_id = port(registers::DRIVE_SETPOINT_ID, true)?;
-        let feedback_id = port(registers::DRIVE_FEEDBACK_ID, true)?;
-        let readiness_id = port(registers::DRIVE_READINESS_ID, false)?;
-        let lohi = r.get(registers::SETPOINT_RAT_LO_HI).map(|x| &x.value);
-        let (lo, hi) = (
-            lohi.and_then(|v| v.float_at(0)).unwrap_or(f64::NAN),
-            lohi.and_then(|v| v.float_at(1)).unwrap_or(f64::NAN),
-        );
-        let schedule = Schedule {
-            range: SetpointRange::new(lo, hi)
-                .map_err(|e| flag_error(registers::SETPOINT_RAT_LO_HI, e))?,
-            period: Period::new(number(registers::PERIOD))
-                .map_err(|e| flag_error(registers::PERIOD, e))?,
-            duration: PatternDuration::new(number(registers::PATTERN_DURATION))
-                .map_err(|e| flag_error(registers::PATTERN_DURATION, e))?,
-            init_duration: InitDuration::new(number(registers::INIT_DURATION))
-                .map_err(|e| flag_error(registers::INIT_DURATION, e))?,
-        };
-        let played = match &self.pattern_file {
-            Some(path) => Played::try_from(crate::cmd::sim::read_pattern_file(path)?)
-                .map_err(|e| InputError(format!("{}: {e}", path.display())))?,
-            None => Played::new(schedule, self.pattern),
-        };
-        let cfg = DriveConfig {
+    /// The checked settings of these arguments, the process's environment and the register file.
+    pub fn settings(self) -> Result<Settings, ConfigErrors> {
+        Settings::try_from(self.raw(&environment()))
+    }
+}
+
+/// `propid drive`'s settings, checked: nothing here can be out of range.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// The bus.
+    pub bus: Bus,
+    /// This node's ID.
+    pub node_id: NodeId,
+    /// Its description.
+    pub description: String,
+    /// The register file, if any (written registers are saved to it).
+    pub registers: Option<PathBuf>,
+    /// Read the port-IDs from this drive.
+    pub from_telega: Option<NodeId>,
+    /// Print the registers and exit.
+    pub show_registers: bool,
+    /// Readiness subject.
+    pub readiness_id: Option<SubjectId>,
+    /// Setpoint subject (`None` only with `from_telega`: the drive's).
+    pub setpoint_id: Option<SubjectId>,
+    /// Feedback subject (`None` only with `from_telega`: the drive's).
+    pub feedback_id: Option<SubjectId>,
+    /// What to play.
+    pub played: Played,
+    /// Setpoint period.
+    pub setpoint_period: SetpointPeriod,
+    /// Deadman timeout.
+    pub deadman: Deadman,
+    /// The drive whose heartbeat is watched.
+    pub drive_node_id: Option<NodeId>,
+    /// Print the running estimate.
+    pub fit: bool,
+    /// Where the TSV goes (`None`: standard output).
+    pub output: Option<PathBuf>,
+    /// Progress lines.
+    pub progress: bool,
+    /// Stop once this precise.
+    pub until: Option<RelativeError>,
+    /// Serve the live page here.
+    pub live: Option<String>,
+    /// Even on a non-loopback address.
+    pub live_allow_remote: bool,
+    /// The limits that stop a runaway rotor.
+    pub limits: Limits,
+}
+
+impl TryFrom<Raw> for Settings {
+    type Error = ConfigErrors;
+
+    /// Checks every setting and reports every error at once.
+    fn try_from(raw: Raw) -> Result<Settings, ConfigErrors> {
+        let Raw { args, mut errors } = raw;
+        // Every field named: a setting added to Args and not checked here does not compile.
+        let Args {
             node_id,
-            mtu: Mtu::from_bytes(self.bus.mtu).ok_or_else(|| {
-                InputError(format!("--mtu must be 8 or 64 (got {})", self.bus.mtu))
-            })?,
+            description,
+            bus,
+            registers,
+            from_telega,
+            show_registers,
             readiness_id,
-            // Zero until --from-telega reads the drive's.
-            setpoint_id: setpoint_id.unwrap_or(SubjectId::from_const(0)),
-            feedback_id: feedback_id.unwrap_or(SubjectId::from_const(0)),
-            drive_node_id: self.drive_node_id,
-            excitation: std::sync::Arc::new(played),
-            setpoint_period: SetpointPeriod::new(number(registers::SETPOINT_PERIOD))
-                .map_err(|e| flag_error(registers::SETPOINT_PERIOD, e))?,
-            deadman: Deadman::new(self.deadman).map_err(|e| flag_error("deadman", e))?,
-            fit: self.fit || until_rel_stderr.is_some(),
-            until_rel_stderr,
-            limits: limits_of(&number)?,
+            setpoint_id,
+            feedback_id,
+            setpoint_rat_lo_hi,
+            period,
+            pattern_duration,
+            init_duration,
+            setpoint_period,
+            pattern,
+            deadman,
+            drive_node_id,
+            fit,
+            output,
+            progress,
+            pattern_file,
+            until_stderr,
+            max_speed,
+            soft_start_setpoint,
+            soft_start_duration,
+            ramp_duration,
+            speed_watchdog,
+            live,
+            live_allow_remote,
+        } = args;
+        let e = &mut errors;
+        let seed = Schedule::SEED;
+        let node_id = e.required_id(node_id);
+        let description = e.or(description, String::new());
+        let bus = Bus::check(bus, e);
+        let readiness_id = e.or(readiness_id, None);
+        // With --from-telega the drive's own registers give the ports the settings leave out.
+        let (setpoint_id, feedback_id) = match from_telega {
+            Some(_) => (e.or(setpoint_id, None), e.or(feedback_id, None)),
+            None => (
+                e.required_id(setpoint_id).map(Some),
+                e.required_id(feedback_id).map(Some),
+            ),
         };
-        Ok((cfg, r))
-    }
-
-    /// [`Args::config_with`] the process's environment.
-    pub fn config(&self) -> Result<(DriveConfig, HostRegistry), InputError> {
-        self.config_with(std::env::vars())
-    }
-}
-
-/// A speed flag: rad/s, or rpm with `rpm`.
-fn speed_arg(text: &str) -> Result<f64, String> {
-    parse_speed(text)
-        .ok_or_else(|| format!("`{text}` is not a speed: give rad/s (1256.6) or rpm (12000rpm)"))
-}
-
-/// The limits the registers hold (0: off), each checked.
-fn limits_of(number: &dyn Fn(&'static str) -> f64) -> Result<Limits, InputError> {
-    let positive = |name: &'static str| Some(number(name)).filter(|v| *v != 0.0);
-    let soft_start = match positive(registers::SOFT_START_DURATION) {
-        None => None,
-        Some(d) => Some(SoftStart {
-            setpoint: SoftStartSetpoint::new(number(registers::SOFT_START_SETPOINT))
-                .map_err(|e| flag_error(registers::SOFT_START_SETPOINT, e))?,
-            duration: SoftStartDuration::new(d)
-                .map_err(|e| flag_error(registers::SOFT_START_DURATION, e))?,
-        }),
-    };
-    Ok(Limits {
-        max_speed: positive(registers::MAX_SPEED)
-            .map(MaxSpeed::new)
-            .transpose()
-            .map_err(|e| flag_error(registers::MAX_SPEED, e))?,
-        soft_start,
-        ramp: positive(registers::RAMP_DURATION)
-            .map(RampDuration::new)
-            .transpose()
-            .map_err(|e| flag_error(registers::RAMP_DURATION, e))?,
-        watchdog: positive(registers::SPEED_WATCHDOG)
-            .map(WatchdogMargin::new)
-            .transpose()
-            .map_err(|e| flag_error(registers::SPEED_WATCHDOG, e))?,
-    })
-}
-
-/// Sets one register from text; the error names `origin`. Speed registers also take rpm.
-fn set_text(r: &mut HostRegistry, name: &str, text: &str, origin: &str) -> Result<(), InputError> {
-    let current = r
-        .get(name)
-        .ok_or_else(|| InputError(format!("{origin}: no register named {name}")))?;
-    let converted;
-    let text = if [registers::MAX_SPEED, registers::SPEED_WATCHDOG].contains(&name) {
-        match parse_speed(text) {
-            Some(v) => {
-                converted = v.to_string();
-                converted.as_str()
+        let range = e.or(setpoint_rat_lo_hi, seed.range);
+        let period = e.or(period, seed.period);
+        let duration = e.or(pattern_duration, seed.duration);
+        let init_duration = e.or(init_duration, seed.init_duration);
+        let setpoint_period = e.or(setpoint_period, SetpointPeriod::SEED);
+        let deadman = e.or(deadman, Deadman::DEFAULT);
+        let drive_node_id = e.given(drive_node_id);
+        let until = e.given(until_stderr);
+        let defaults = Limits::DEFAULT;
+        let max_speed = e.or(max_speed, defaults.max_speed);
+        let soft_start_setpoint = e.or(soft_start_setpoint, SoftStart::DEFAULT.setpoint);
+        let soft_start_duration = e.or(soft_start_duration, Some(SoftStart::DEFAULT.duration));
+        let ramp = e.or(ramp_duration, defaults.ramp);
+        let watchdog = e.or(speed_watchdog, defaults.watchdog);
+        let from_file = pattern_file.map(|path| {
+            crate::cmd::sim::read_pattern_file(&path)
+                .map_err(|e| e.0)
+                .and_then(|x| Played::try_from(x).map_err(|e| format!("{}: {e}", path.display())))
+        });
+        let from_file = match from_file {
+            Some(Err(why)) => {
+                e.push(ConfigError::Flag {
+                    flag: "pattern-file",
+                    why,
+                });
+                None
             }
-            None => text,
-        }
-    } else {
-        text
-    };
-    let value = parse_text(&current.value, text).ok_or_else(|| {
-        InputError(format!(
-            "{origin}: `{text}` is not a valid {} for register {name}",
-            registers::describe(&current.value)
-        ))
-    })?;
-    r.set(name, &value)
-        .map_err(|e| InputError(format!("{origin}: {name}: {e}")))
-}
-
-/// A configuration error in the words of the command line: the flag, the register and its
-/// environment variable, and what is wrong.
-pub fn flag_error(setting: &str, problem: impl ToString) -> InputError {
-    let problem = problem.to_string();
-    let (flag, register) = match setting {
-        registers::NODE_ID => ("--node-id", Some(registers::NODE_ID)),
-        registers::DRIVE_SETPOINT_ID => ("--setpoint-id", Some(registers::DRIVE_SETPOINT_ID)),
-        registers::DRIVE_FEEDBACK_ID => ("--feedback-id", Some(registers::DRIVE_FEEDBACK_ID)),
-        registers::DRIVE_READINESS_ID => ("--readiness-id", Some(registers::DRIVE_READINESS_ID)),
-        registers::SETPOINT_RAT_LO_HI => {
-            ("--setpoint-rat-lo-hi", Some(registers::SETPOINT_RAT_LO_HI))
-        }
-        registers::PERIOD => ("--period", Some(registers::PERIOD)),
-        registers::PATTERN_DURATION => ("--pattern-duration", Some(registers::PATTERN_DURATION)),
-        registers::INIT_DURATION => ("--init-duration", Some(registers::INIT_DURATION)),
-        registers::SETPOINT_PERIOD => ("--setpoint-period", Some(registers::SETPOINT_PERIOD)),
-        registers::MAX_SPEED => ("--max-speed", Some(registers::MAX_SPEED)),
-        registers::SOFT_START_SETPOINT => (
-            "--soft-start-setpoint",
-            Some(registers::SOFT_START_SETPOINT),
-        ),
-        registers::SOFT_START_DURATION => (
-            "--soft-start-duration",
-            Some(registers::SOFT_START_DURATION),
-        ),
-        registers::RAMP_DURATION => ("--ramp-duration", Some(registers::RAMP_DURATION)),
-        registers::SPEED_WATCHDOG => ("--speed-watchdog", Some(registers::SPEED_WATCHDOG)),
-        other => return InputError(format!("--{} {problem}", other.replace('_', "-"))),
-    };
-    match register {
-        Some(reg) => InputError(format!(
-            "{flag} (register {reg}, {}) {problem}",
-            registers::environment_name(reg)
-        )),
-        None => InputError(format!("{flag} {problem}")),
+            Some(Ok(played)) => Some(Some(played)),
+            None => Some(None),
+        };
+        let (
+            Some(node_id),
+            Some(description),
+            Some(bus),
+            Some(readiness_id),
+            Some(setpoint_id),
+            Some(feedback_id),
+            Some(range),
+            Some(period),
+            Some(duration),
+            Some(init_duration),
+            Some(setpoint_period),
+            Some(deadman),
+            Some(drive_node_id),
+            Some(until),
+            Some(from_file),
+            Some(max_speed),
+            Some(soft_start_setpoint),
+            Some(soft_start_duration),
+            Some(ramp),
+            Some(watchdog),
+        ) = (
+            node_id,
+            description,
+            bus,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            range,
+            period,
+            duration,
+            init_duration,
+            setpoint_period,
+            deadman,
+            drive_node_id,
+            until,
+            from_file,
+            max_speed,
+            soft_start_setpoint,
+            soft_start_duration,
+            ramp,
+            watchdog,
+        )
+        else {
+            return Err(errors);
+        };
+        errors.check()?;
+        let played = from_file.unwrap_or_else(|| {
+            let schedule = Schedule {
+                range,
+                period,
+                duration,
+                init_duration,
+            };
+            Played::new(schedule, pattern)
+        });
+        Ok(Settings {
+            bus,
+            node_id,
+            description,
+            registers,
+            from_telega,
+            show_registers,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            played,
+            setpoint_period,
+            deadman,
+            drive_node_id,
+            fit: fit || until.is_some(),
+            output,
+            progress,
+            until,
+            live,
+            live_allow_remote,
+            limits: Limits {
+                max_speed,
+                soft_start: soft_start_duration.map(|duration| SoftStart {
+                    setpoint: soft_start_setpoint,
+                    duration,
+                }),
+                ramp,
+                watchdog,
+            },
+        })
     }
 }
 
-/// Parses the seed's `setpoint_rat_lo_hi` register: two numbers, space or comma separated.
-pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
-    let bad = || InputError(format!("setpoint_rat_lo_hi `{text}` is not two numbers"));
-    let values: Vec<f64> = text
-        .split(|c: char| c.is_whitespace() || c == ',')
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    match values[..] {
-        [lo, hi] => Ok((lo, hi)),
-        _ => Err(bad()),
+impl Settings {
+    /// The driver's configuration (ports the drive was to give are 0 until it has).
+    pub fn drive_config(&self) -> DriveConfig {
+        DriveConfig {
+            node_id: self.node_id,
+            mtu: self.bus.mtu,
+            readiness_id: self.readiness_id,
+            setpoint_id: self.setpoint_id.unwrap_or(SubjectId::from_const(0)),
+            feedback_id: self.feedback_id.unwrap_or(SubjectId::from_const(0)),
+            drive_node_id: self.drive_node_id,
+            excitation: Arc::new(self.played),
+            setpoint_period: self.setpoint_period,
+            deadman: self.deadman,
+            fit: self.fit,
+            until_rel_stderr: self.until,
+            limits: self.limits,
+        }
+    }
+
+    /// The registers the drive serves: `cfg`'s values and the description.
+    pub fn served(&self, cfg: &DriveConfig) -> HostRegistry {
+        let mut served = drive_registers(cfg, self.registers.is_some());
+        let description = registers::text(&self.description);
+        let _ = served.set(NODE_DESCRIPTION, &description);
+        served
     }
 }
 
@@ -489,37 +610,38 @@ fn save_written(
 
 /// Runs `propid drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (mut cfg, mut file_registers) = args.config()?;
-    if args.show_registers {
-        print!("{}", render_file(&file_registers));
+    let s = args.settings()?;
+    let mut cfg = s.drive_config();
+    if s.show_registers {
+        print!("{}", render_file(&s.served(&cfg)));
         return Ok(());
     }
-    let mut transport = args.bus.open()?;
-    if let Some(node) = args.from_telega {
+    let mut transport = s.bus.open()?;
+    if let Some(node) = s.from_telega {
         let ports =
             crate::cmd::telega::drive_ports(transport.as_mut(), cfg.node_id, cfg.mtu, node)?;
-        let pick = |flag: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
-            match (flag, theirs) {
+        let pick = |ours: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
+            match (ours, theirs) {
                 (Some(f), Some(t)) if f != t => Err(InputError(format!(
-                    "--{name} {f} but drive {node} has {reg} = {t}; drop the flag or change the register with propid telega"
+                    "--{name} {f} but drive {node} has {reg} = {t}; drop the setting or change the register with propid telega"
                 ))),
                 (_, t) => Ok(t),
             }
         };
         let feedback = pick(
-            args.feedback_id,
+            s.feedback_id,
             ports.feedback,
             "feedback-id",
             registers::TELEGA_FEEDBACK_ID,
         )?;
         let setpoint = pick(
-            args.setpoint_id,
+            s.setpoint_id,
             ports.setpoint,
             "setpoint-id",
             registers::TELEGA_SETPOINT_ID,
         )?;
         let readiness = pick(
-            args.readiness_id,
+            s.readiness_id,
             ports.readiness,
             "readiness-id",
             registers::TELEGA_READINESS_ID,
@@ -545,37 +667,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             cfg.readiness_id.map_or("none".into(), |r| r.to_string())
         );
     }
-    // What the node serves: the run's values, and the text registers as given.
-    let mut served = drive_registers(&cfg, args.registers.is_some());
-    if let Some(d) = file_registers.get("uavcan.node.description") {
-        let _ = served.set("uavcan.node.description", &d.value.clone());
-    }
-    let register_file = args.registers.clone();
+    // What the node serves (and saves to the register file): the run's values.
+    let mut served = s.served(&cfg);
     let stop = Arc::new(AtomicBool::new(false));
-    crate::signals::install(&stop)?;
-    let mut out: Box<dyn Write> = match &args.output {
+    let _handlers = crate::signals::install(&stop)?;
+    let mut out: Box<dyn Write> = match &s.output {
         Some(p) => Box::new(
             std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
         ),
         None => Box::new(std::io::stdout()),
     };
-    let played = played_of(&args, &cfg)?;
-    let excitation = *played.excitation();
+    let excitation = *s.played.excitation();
     let readiness = cfg.readiness_id.is_some();
-    let fit = cfg.fit;
     let mut live = crate::live::start_for_drive(
-        args.live.as_deref(),
-        args.live_allow_remote,
+        s.live.as_deref(),
+        s.live_allow_remote,
         &stop,
-        played,
+        s.played,
         "propid drive",
     )?;
     eprintln!("drive: {}", limits_line(&cfg));
-    let drive = Drive::with_registers(
-        cfg,
-        &served,
-        propid_drive_host::realtime::Clock::now(&SystemClock),
-    );
+    let drive = Drive::with_registers(cfg, &served.clone(), SystemClock.now());
     let outcome = run_drive_machine(
         drive,
         transport.as_mut(),
@@ -584,9 +696,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &mut out,
         &mut |e| {
             if let DriveEvent::RegisterWritten { name, value } = e {
-                save_written(register_file.as_deref(), &mut file_registers, name, value);
+                save_written(s.registers.as_deref(), &mut served, name, value);
             }
-            print_event(e, &excitation, args.progress);
+            print_event(e, &excitation, s.progress);
             if let Some((_, view)) = live.as_mut() {
                 view.on_event(e);
             }
@@ -620,7 +732,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     eprintln!("drive: {}", feedback_line(r));
     eprintln!("drive: {}", priority_line(&outcome.link.priority));
-    if let Some(e) = r.estimate.filter(|_| fit) {
+    if let Some(e) = r.estimate.filter(|_| s.fit) {
         eprintln!(
             "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
             e.j, e.j_stderr, e.c1, e.c2, e.c2_stderr
@@ -633,25 +745,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Ok(())
         }
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
-        StopReason::Signal => std::process::exit(130),
+        StopReason::Signal => Err(crate::Interrupted.into()),
         StopReason::Limit(limit) => Err(crate::LimitStopped(limit.to_string()).into()),
         reason => anyhow::bail!("{reason}"),
     }
-}
-
-/// How much feedback was lost on its way during the recording, and where it was seen missing.
-pub fn feedback_line(r: &propid_drive_proto::drive::StopReport) -> String {
-    let l = r.feedback_lost;
-    let expected = r.rows + l.lost();
-    let share = if expected == 0 {
-        100.0
-    } else {
-        100.0 * r.rows as f64 / expected as f64
-    };
-    format!(
-        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames rejected by the reassembler",
-        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.dropped_transfers
-    )
 }
 
 /// The limits in force, said before the run.
@@ -677,13 +774,28 @@ pub fn limits_line(cfg: &DriveConfig) -> String {
     match l.max_speed {
         Some(m) => parts.push(format!(
             "maximum speed {m} rad/s ({:.0} rpm)",
-            m.get() / propid_drive_proto::settings::RAD_S_PER_RPM
+            m.get() / RAD_S_PER_RPM
         )),
         None => parts.push(
             "no maximum speed (--max-speed: your propeller's rated speed, e.g. 12000rpm)".into(),
         ),
     }
     format!("limits: {}", parts.join("; "))
+}
+
+/// How much feedback was lost on its way during the recording, and where it was seen missing.
+pub fn feedback_line(r: &propid_drive_proto::drive::StopReport) -> String {
+    let l = r.feedback_lost;
+    let expected = r.rows + l.lost();
+    let share = if expected == 0 {
+        100.0
+    } else {
+        100.0 * r.rows as f64 / expected as f64
+    };
+    format!(
+        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames rejected by the reassembler",
+        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.dropped_transfers
+    )
 }
 
 /// The loop's scheduling priority, and how to get a real-time one where it was refused.
@@ -694,14 +806,5 @@ pub fn priority_line(p: &propid_transport::priority::ThreadPriority) -> String {
         format!(
             "the control loop ran at {p}; on a busy machine it can wait for a CPU long enough to lose feedback (docs/TRANSPORTS.md); on Linux `sudo setcap cap_sys_nice+ep \"$(command -v propid)\"` lets it take a real-time priority"
         )
-    }
-}
-
-/// What `cfg` plays, as the science describes it (for the progress lines and the live page).
-fn played_of(args: &Args, cfg: &DriveConfig) -> Result<Played, InputError> {
-    match &args.pattern_file {
-        Some(path) => Played::try_from(crate::cmd::sim::read_pattern_file(path)?)
-            .map_err(|e| InputError(format!("{}: {e}", path.display()))),
-        None => Ok(Played::new(cfg.excitation.schedule(), args.pattern)),
     }
 }
