@@ -645,11 +645,14 @@ impl Drive {
                     );
                     return;
                 }
-                let running = self.estimate();
-                if let Some(e) = running {
-                    self.guard.model_inertia(e.j, e.j_stderr);
+                // The running fit's inertia bounds the watchdog once it is identified (inside
+                // its bounds: a J pinned at the largest one says nothing).
+                if let Ok(e) = self.estimator.estimate(&LoadBounds::default()) {
+                    if !e.at_bound[0] {
+                        self.guard.model_inertia(e.mass, e.mass_stderr);
+                    }
                 }
-                let estimate = if self.cfg.fit { running } else { None };
+                let estimate = if self.cfg.fit { self.estimate() } else { None };
                 self.events.push_back(DriveEvent::Progress(Progress {
                     elapsed,
                     feedback_per_s: self.rows - self.rows_at_progress,

@@ -18,7 +18,8 @@
 //!                   rotation is a runaway (the torque sign is reversed)
 //!                 after the soft start: J_min = its impulse estimate ∫τ dt / Δω ÷ 4 (the
 //!                   estimate is high: drag and friction are left out)
-//!                 once the running fit's J is known to 5 %: J_min = J ÷ 3
+//!                 once the running fit's J is known to 5 %, inside its bounds and not above twice
+//!                   the soft start's estimate: J_min = J ÷ 3
 //!               τ is the largest push of the last 50 ms, so a torque the rotor feels a little
 //!               after the drive reports it (a lag) is not a runaway
 //! ```
@@ -384,6 +385,8 @@ pub struct Guard {
     above_max: u32,
     /// (drive time if stamped, host time, velocity, torque) during the soft start.
     soft: Vec<(Option<f64>, f64, f64, f64)>,
+    /// The soft start's impulse estimate of J (high: drag and friction left out).
+    soft_inertia: Option<f64>,
     watchdog: Option<Watchdog>,
 }
 
@@ -394,6 +397,7 @@ impl Guard {
             limits,
             above_max: 0,
             soft: Vec::new(),
+            soft_inertia: None,
             watchdog: limits.watchdog.map(|m| Watchdog::new(m.get())),
         }
     }
@@ -514,6 +518,7 @@ impl Guard {
                 .is_finite()
                 .then_some(impulse / (to - from))
                 .filter(|j| *j > 0.0);
+            self.soft_inertia = inertia;
             if let (Some(j), Some(w)) = (inertia, self.watchdog.as_mut()) {
                 w.set_inertia_bound(j / SOFT_START_INERTIA_MARGIN);
             }
@@ -535,9 +540,12 @@ impl Guard {
         })
     }
 
-    /// The running fit's inertia and its standard error: once precise, the watchdog's bound.
+    /// The running fit's inertia and its standard error: once precise, and not above twice what
+    /// the soft start measured (which is high already), the watchdog's bound.
     pub fn model_inertia(&mut self, j: f64, j_stderr: f64) {
-        if j > 0.0 && j_stderr.is_finite() && j_stderr <= MODEL_INERTIA_PRECISION * j {
+        let consistent = self.soft_inertia.is_none_or(|soft| j <= 2.0 * soft);
+        if j > 0.0 && j_stderr.is_finite() && j_stderr <= MODEL_INERTIA_PRECISION * j && consistent
+        {
             if let Some(w) = self.watchdog.as_mut() {
                 w.set_inertia_bound(j / MODEL_INERTIA_MARGIN);
             }
@@ -595,13 +603,19 @@ mod tests {
     fn an_imprecise_fit_sets_no_bound_and_the_torques_direction_decides() {
         let mut g = Guard::new(Limits::DEFAULT);
         g.model_inertia(2e-5, 2e-6); // 10 %: not used
-        // Any growth is possible while the torque pushes the rotation.
+                                     // Any growth is possible while the torque pushes the rotation.
         assert_eq!(feed(&mut g, 2e-6, 0.05, 500), None);
         // Growth against the torque is not.
         let mut g = Guard::new(Limits::DEFAULT);
         let trip = feed(&mut g, -2e-5, 0.05, 500).expect("a runaway");
         assert!(
-            matches!(trip, LimitStop::Runaway { inertia_bound: None, .. }),
+            matches!(
+                trip,
+                LimitStop::Runaway {
+                    inertia_bound: None,
+                    ..
+                }
+            ),
             "{trip:?}"
         );
     }

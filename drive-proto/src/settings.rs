@@ -248,6 +248,16 @@ bounded!(
     "rad/s"
 );
 
+bounded!(
+    /// The torque a simulated motor makes per torque it is commanded and reports, −10 to 10: −1
+    /// reverses its sign, 0 makes none (`propid sim-drive --torque-scale`, for trying the limits).
+    TorqueScale,
+    -10.0 false,
+    10.0,
+    false,
+    ""
+);
+
 /// rad/s per rpm.
 pub const RAD_S_PER_RPM: f64 = std::f64::consts::PI / 30.0;
 

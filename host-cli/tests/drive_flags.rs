@@ -85,6 +85,8 @@ fn sim_drive_numbers_are_checked() {
         (&["--feedback-id", "9000"], "--feedback-id"),
         (&["--setpoint-id", "8192"], "--setpoint-id"),
         (&["--readiness-id", "9000"], "--readiness-id"),
+        (&["--torque-scale", "20"], "--torque-scale"),
+        (&["--torque-scale", "nan"], "--torque-scale"),
     ] {
         let mut a = vec!["sim-drive"];
         a.extend_from_slice(args);

@@ -11,11 +11,12 @@ use propid_core::dsdl::Readiness;
 use propid_drive_host::realtime::{Clock, SystemClock};
 use propid_drive_host::sim_drive::run_sim_drive_machine;
 use propid_drive_host::stand::StandPlant;
+use propid_drive_proto::plant::TorqueScaled;
 use propid_drive_proto::registers::{
     self, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN, TELEGA_FEEDBACK_ID, TELEGA_READINESS_ID,
     TELEGA_SETPOINT_ID,
 };
-use propid_drive_proto::settings::{FeedbackInterval, RunLimit};
+use propid_drive_proto::settings::{FeedbackInterval, RunLimit, TorqueScale};
 use propid_drive_proto::sim_drive::{sim_drive_registers, SimDrive, SimDriveConfig, SimDriveEvent};
 
 use crate::bus::{Bus, BusArgs};
@@ -70,6 +71,13 @@ setting! {
         };
 }
 
+setting! {
+    /// The simulated motor's torque per commanded torque.
+    TorqueScaleSetting: TorqueScale = Names::flag("torque-scale"),
+        "The torque the simulated motor makes per torque it is commanded and reports: -1 reverses its sign (a motor wired the other way), 0 makes none; for trying propid drive's limits [default: 1]",
+        |text: &str| number(text, TorqueScale::new);
+}
+
 command_args! {
     /// Arguments of `propid sim-drive`: Telega's registers, each also a flag and a variable.
     pub struct Args {
@@ -81,6 +89,7 @@ command_args! {
             interval: Interval as "S",
             local_timestamp: LocalTimestamp as "BOOL",
             duration: Duration as "S",
+            torque_scale: TorqueScaleSetting as "K",
         }
         registers {}
         nested {
@@ -102,6 +111,8 @@ pub struct Settings {
     pub local_timestamp: bool,
     /// The stand it simulates.
     pub stand: StandArgs,
+    /// Its motor's torque per commanded torque.
+    pub torque_scale: TorqueScale,
 }
 
 impl TryFrom<Args> for Settings {
@@ -120,6 +131,7 @@ impl TryFrom<Args> for Settings {
             interval,
             local_timestamp,
             duration,
+            torque_scale,
             stand,
         } = args;
         let e = &mut errors;
@@ -132,6 +144,7 @@ impl TryFrom<Args> for Settings {
         let interval = e.or(interval, example.interval);
         let local_timestamp = e.or(local_timestamp, true);
         let duration = e.or(duration, None);
+        let torque_scale = e.or(torque_scale, TorqueScale::from_const(1.0));
         let (
             Some(node_id),
             Some(bus),
@@ -141,6 +154,7 @@ impl TryFrom<Args> for Settings {
             Some(interval),
             Some(local_timestamp),
             Some(duration),
+            Some(torque_scale),
         ) = (
             node_id,
             bus,
@@ -150,6 +164,7 @@ impl TryFrom<Args> for Settings {
             interval,
             local_timestamp,
             duration,
+            torque_scale,
         )
         else {
             return Err(errors);
@@ -169,6 +184,7 @@ impl TryFrom<Args> for Settings {
             sim,
             local_timestamp,
             stand,
+            torque_scale,
         })
     }
 }
@@ -189,8 +205,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         sim: cfg,
         local_timestamp,
         stand,
+        torque_scale,
     } = Settings::try_from(args)?;
-    let plant = StandPlant::boxed(stand.config()?, stand.seed)?;
+    let mut plant = StandPlant::boxed(stand.config()?, stand.seed)?;
+    if torque_scale.get() != 1.0 {
+        plant = Box::new(TorqueScaled::new(plant, torque_scale.get()));
+        eprintln!(
+            "sim-drive: the motor makes {} times the torque it is commanded and reports",
+            torque_scale
+        );
+    }
     let mut transport = bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     let _handlers = crate::signals::install(&stop)?;
