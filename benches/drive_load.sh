@@ -8,12 +8,16 @@
 #   default: current=target/release/propid (both sides); a LABEL ending in `-unprivileged` runs
 #   both propid processes without CAP_SYS_NICE (setpriv), as a user who may not take a
 #   real-time priority
-# env: RUNS (3 per build), PATTERN_S (20), LOAD_PER_CORE (2)
+# env: RUNS (3 per build), PATTERN_S (20), LOAD_PER_CORE (2), LOAD_SESSION (same: the busy loops
+#   share propid's session, so Linux's autogroup scheduling gives them and propid one share of the
+#   CPUs — the worst case; own: they run in a session of their own, like a build in another
+#   terminal or a browser, and propid's session gets its own share)
 #
 # Per run it prints the rows recorded, the feedback missing by the drive's own timestamps (the
 # `t` column: lost anywhere, in the simulated drive, the pty or propid) plus, when the run stopped
 # early (the dead-man), the rest of the pattern, and the share kept; the drive's and the simulated
-# drive's own accounts when the build prints them. Then the median share per build. Needs socat.
+# drive's own accounts when the build prints them, and how long each process's control loop waited
+# for a CPU (its run-queue delay from /proc/PID/schedstat: over the run, and the worst second). Then the median share per build. Needs socat.
 # Exits non-zero when a completed run recorded nothing or a process fails otherwise.
 set -euo pipefail
 shopt -s inherit_errexit
@@ -22,6 +26,8 @@ cd "$(dirname "$0")/.."
 RUNS=${RUNS:-3}
 PATTERN_S=${PATTERN_S:-20}
 LOAD_PER_CORE=${LOAD_PER_CORE:-2}
+LOAD_SESSION=${LOAD_SESSION:-same}
+case $LOAD_SESSION in same | own) ;; *) echo "drive_load: LOAD_SESSION is same or own" >&2; exit 1 ;; esac
 INTERVAL=0.002
 [ $# -gt 0 ] || set -- "current=target/release/propid"
 command -v socat >/dev/null || { echo "drive_load: needs socat (apt-get install socat)" >&2; exit 1; }
@@ -43,7 +49,11 @@ trap cleanup EXIT
 busy() {
     local n=$(( $(nproc) * LOAD_PER_CORE ))
     for _ in $(seq "$n"); do
-        ( while :; do :; done ) &
+        if [ "$LOAD_SESSION" = own ]; then
+            setsid bash -c 'while :; do :; done' &
+        else
+            ( while :; do :; done ) &
+        fi
         pids+=($!)
     done
 }
@@ -52,6 +62,45 @@ unbusy() {
     for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
     for p in "${pids[@]}"; do wait "$p" 2>/dev/null || true; done
     pids=()
+}
+
+# The time a process's main thread (propid's control loop) spent waiting for a CPU so far [ns]
+# (its run-queue delay, /proc/PID/schedstat), or nothing once it has gone.
+waited() { cut -d' ' -f2 "/proc/$1/schedstat" 2>/dev/null || true; }
+
+# Samples `waited` of PIDS every 0.2 s into FILE ("seconds pid ns") until they have all gone.
+sample_waits() {
+    local file=$1; shift
+    local t0; t0=$(date +%s.%N)
+    while :; do
+        local alive=0
+        for p in "$@"; do
+            local w; w=$(waited "$p")
+            [ -n "$w" ] || continue
+            alive=1
+            echo "$(date +%s.%N) $t0 $p $w" >>"$file"
+        done
+        [ "$alive" -eq 1 ] || break
+        sleep 0.2
+    done
+}
+
+# "NAME waited for a CPU X % of the run (at most Y ms in one second)", from `sample_waits` lines.
+wait_summary() {
+    awk -v pid="$2" -v name="$3" '$3 == pid {
+            t = $1 - $2; w = $4 / 1e9
+            if (n == 0) { t0 = t; w0 = w }
+            ts[n] = t; ws[n] = w; n++
+        }
+        END {
+            if (n < 2) exit
+            worst = 0
+            for (i = 0; i < n; i++)
+                for (j = i + 1; j < n && ts[j] - ts[i] <= 1.0001; j++)
+                    if (ts[j] - ts[i] >= 0.95 && ws[j] - ws[i] > worst) worst = ws[j] - ws[i]
+            printf "%s waited for a CPU %.0f %% of the run (at most %.0f ms in one second)\n",
+                name, 100 * (ws[n - 1] - w0) / (ts[n - 1] - t0), 1000 * worst
+        }' "$1"
 }
 
 # One run: prints "rows missing share" on stdout; the processes' summaries on stderr.
@@ -70,10 +119,17 @@ run_once() {
     UAVCAN__NODE__ID=10 UAVCAN__PUB__READINESS__ID=10 UAVCAN__PUB__SP_RAT__ID=24 \
         UAVCAN__SUB__FB_DYN__ID=110 \
         $as "$drive_bin" drive --iface "slcan:$b" --pattern-duration "$PATTERN_S" --init-duration 1 \
-        --progress=false -o "$work/run.$tag.tsv" 2>"$work/drive.$tag.err" || status=$?
+        --progress=false -o "$work/run.$tag.tsv" 2>"$work/drive.$tag.err" &
+    local drive_pid=$!
+    sample_waits "$work/waits.$tag" "$drive_pid" "$sim_pid" &
+    local sampler=$!
+    wait "$drive_pid" || status=$?
     unbusy
+    wait_summary "$work/waits.$tag" "$drive_pid" "propid drive" | sed "s/^/  [$tag] /" >&2
+    wait_summary "$work/waits.$tag" "$sim_pid" "propid sim-drive" | sed "s/^/  [$tag] /" >&2
     kill -INT "$sim_pid" 2>/dev/null || true
     wait "$sim_pid" 2>/dev/null || true
+    wait "$sampler" 2>/dev/null || true
     kill "$socat_pid" 2>/dev/null || true
     wait "$socat_pid" 2>/dev/null || true
     grep -h -E '^(drive: (stopped|feedback|the control loop)|sim-drive: [0-9])' "$work/drive.$tag.err" "$work/sim.$tag.err" |
@@ -92,11 +148,12 @@ run_once() {
         END {
             if (rows == 0 && !early) { print "drive_load: a completed run recorded no rows" > "/dev/stderr"; exit 1 }
             if (early && rows + missing < expected) missing = expected - rows
-            printf "%d %d %.3f\n", rows, missing, rows + missing > 0 ? 100 * rows / (rows + missing) : 0
+            share = (rows + missing > 0) ? 100 * rows / (rows + missing) : 0
+            printf "%d %d %.3f\n", rows, missing, share
         }' "$work/run.$tag.tsv"
 }
 
-echo "drive_load: relay ${relay:-at normal priority}; $(nproc) cores, $((LOAD_PER_CORE * $(nproc))) busy loops, ${PATTERN_S} s at 500 Hz per run, $RUNS runs per build, alternating; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "drive_load: relay ${relay:-at normal priority}; $(nproc) cores, $((LOAD_PER_CORE * $(nproc))) busy loops (session: $LOAD_SESSION), ${PATTERN_S} s at 500 Hz per run, $RUNS runs per build, alternating; load before: $(cut -d' ' -f1-3 /proc/loadavg)"
 declare -A shares
 for r in $(seq "$RUNS"); do
     for spec in "$@"; do

@@ -420,12 +420,8 @@ impl SimDrive {
         if self.restart_at.is_some_and(|t| now >= t) {
             self.restart(now);
         }
-        // Instants older than FEEDBACK_HOLD would be dropped unsent: not sampled at all.
-        let hold_start = Instant::from_micros(
-            now.as_micros()
-                .saturating_sub(FEEDBACK_HOLD.as_micros() as u64),
-        );
-        while self.next_feedback < hold_start {
+        // Instants FEEDBACK_HOLD old would be dropped unsent: not sampled at all.
+        while self.next_feedback + FEEDBACK_HOLD <= now {
             self.summary.feedback_dropped += 1;
             self.next_feedback = self.next_feedback + self.interval;
         }
@@ -639,6 +635,61 @@ fn interval_of(registers: &HostRegistry) -> Option<FeedbackInterval> {
 mod tests {
     use super::*;
     use crate::registers::check_prerequisites;
+    use propid_core::sample::Sample;
+
+    /// A load that does not move.
+    struct Still(f64);
+
+    impl Plant for Still {
+        fn set_setpoint(&mut self, _: f64) {}
+        fn time(&self) -> f64 {
+            self.0
+        }
+        fn advance_to(&mut self, t: f64) {
+            self.0 = self.0.max(t);
+        }
+        fn measure(&mut self) -> Sample {
+            Sample {
+                t: self.0,
+                force: 0.0,
+                velocity: 0.0,
+                acceleration: 0.0,
+                position: 0.0,
+            }
+        }
+    }
+
+    /// Polls everything out at `now`; the feedback timestamps sent [µs].
+    fn drain(sim: &mut SimDrive, now: Instant) -> Vec<u64> {
+        while sim.poll_transmit(now).is_some() {}
+        std::iter::from_fn(|| sim.poll_event())
+            .filter_map(|e| match e {
+                SimDriveEvent::Feedback(fb) => Some(fb.timestamp.microsecond),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_stalled_loop_sends_every_instant_it_missed_in_order_within_the_hold() {
+        let mut sim = SimDrive::new(
+            SimDriveConfig::example(),
+            Box::new(Still(0.0)),
+            Instant::ZERO,
+        );
+        assert_eq!(drain(&mut sim, Instant::ZERO), [0]);
+        // 100 ms without a call: the 50 instants it slept through, in order, none superseded.
+        let sent = drain(&mut sim, Instant::from_micros(100_000));
+        assert_eq!(sent, (1..=50).map(|k| k * 2_000).collect::<Vec<u64>>());
+        assert_eq!(sim.summary().feedback_dropped, 0);
+        // 2 s without a call: only the last 0.5 s is sampled; the rest is counted as dropped.
+        let sent = drain(&mut sim, Instant::from_micros(2_100_000));
+        assert_eq!(sent.len(), 250);
+        assert_eq!(sent[0], 1_602_000);
+        assert!(sent.windows(2).all(|w| w[1] == w[0] + 2_000));
+        assert_eq!(sim.summary().feedback_dropped, 750);
+        assert_eq!(sim.summary().feedback_published, 1 + 50 + 250);
+    }
 
     #[test]
     fn prerequisites() {
