@@ -82,7 +82,7 @@ pub fn run_drive_machine(
             reason: StopReason::Transport("the drive loop ended before the drive stopped".into()),
             rows: now.rows,
             feedback_lost: now.feedback_lost,
-            dropped_transfers: now.dropped_transfers,
+            damaged_frames: 0,
             standby_sent: 0,
             zero_setpoints_sent: 0,
             tx: now.tx,

@@ -221,8 +221,10 @@ pub struct StopReport {
     /// Feedback transfers lost on their way during the pattern (gaps in transfer-IDs and in
     /// the drive's timestamps).
     pub feedback_lost: FeedbackLoss,
-    /// Received frames the reassembler rejected.
-    pub dropped_transfers: u64,
+    /// Received frames the reassembler discarded as parts of damaged transfers (a lost start, a
+    /// bad toggle, transfer-ID or CRC, no free session); frames of ports nobody subscribed to are
+    /// not counted.
+    pub damaged_frames: u64,
     /// STANDBY readiness messages handed to the link (0 when no readiness subject is set).
     pub standby_sent: u32,
     /// Whole zero-setpoint transfers handed to the link.
@@ -248,6 +250,21 @@ pub struct FeedbackRow {
     pub ts_local: f64,
     /// What it says (time from the drive's own timestamp).
     pub sample: Sample,
+}
+
+/// Frames the reassembler discarded as parts of damaged transfers.
+fn damaged_frames(rx: &propid_core::can::RxStats) -> u64 {
+    use propid_core::can::RxError;
+    [
+        RxError::MissingStart,
+        RxError::BadToggle,
+        RxError::WrongTransferId,
+        RxError::BadCrc,
+        RxError::OutOfSessions,
+    ]
+    .into_iter()
+    .map(|e| rx.rejected(e))
+    .sum()
 }
 
 /// What the drive reports while it runs.
@@ -731,7 +748,7 @@ impl Drive {
             reason,
             rows: self.rows,
             feedback_lost: self.loss.loss(),
-            dropped_transfers: self.node.stats().rx.rejected_total(),
+            damaged_frames: damaged_frames(&self.node.stats().rx),
             standby_sent: self.standby_sent,
             zero_setpoints_sent: self.zero_setpoints_sent,
             tx: self.tx_counters(),

@@ -220,6 +220,18 @@ fn drives_the_simulated_telega_and_fits_it() {
         outcome.link.priority
     );
     assert_eq!(rows as u64, outcome.report.rows);
+    // The loss the summary reports is the gaps in the recording's own drive timestamps.
+    let t: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').nth(1).unwrap().parse().unwrap())
+        .collect();
+    let gaps: u64 = t
+        .windows(2)
+        .map(|w| (((w[1] - w[0]) / 0.002).round() as u64).saturating_sub(1))
+        .sum();
+    assert_eq!(outcome.report.feedback_lost.by_timestamp, gaps);
+    assert_eq!(outcome.report.damaged_frames, 0);
     assert_eq!(
         summary.last_readiness,
         Some(Readiness::STANDBY),

@@ -793,8 +793,8 @@ pub fn feedback_line(r: &propid_drive_proto::drive::StopReport) -> String {
         100.0 * r.rows as f64 / expected as f64
     };
     format!(
-        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames rejected by the reassembler",
-        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.dropped_transfers
+        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames of damaged transfers",
+        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.damaged_frames
     )
 }
 
