@@ -16,16 +16,10 @@ setting! {
             text: text.to_string(),
             error,
         });
-}
-
-setting! {
     /// The frame size.
     FrameSize: Mtu = Names::register("mtu", "uavcan.can.mtu", "UAVCAN__CAN__MTU"),
         "Frame size: 8 (Classic CAN) or 64 (CAN FD) [default: 8]",
         crate::settings::mtu;
-}
-
-setting! {
     /// The bit rates.
     Bitrate: (u32, u32) = Names::register("bitrate", "uavcan.can.bitrate", "UAVCAN__CAN__BITRATE"),
         "Bit rate(s), \"ARBITRATION [DATA]\" [default: 1000000]",

@@ -15,7 +15,10 @@
 //! file (pandas reads them all); propid checks the columns it uses (t, force, velocity,
 //! acceleration), which gives the same window on files whose other columns are complete.
 
+mod columns;
 mod scan;
+
+pub use columns::{fit_columns, Columns};
 
 use std::fs::File;
 use std::io::BufRead;
@@ -177,6 +180,21 @@ fn is_complete(s: &Sample) -> bool {
 
 /// Pass 1: the seed's window.
 pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitError> {
+    let name = reader.source_name().to_string();
+    let rows = std::iter::from_fn(|| match reader.next_row() {
+        Ok(Some(row)) => Some(Ok((reader.line_number(), row.sample))),
+        Ok(None) => None,
+        Err(e) => Some(Err(FitError::from(e))),
+    });
+    window_of(rows, &name)
+}
+
+/// The seed's window over rows given in order as (1-based line, sample); `name` is the source in
+/// messages.
+fn window_of(
+    samples: impl Iterator<Item = Result<(u64, Sample), FitError>>,
+    name: &str,
+) -> Result<Window, FitError> {
     let mut rows = 0u64;
     // Last row where each used column had a value (pandas' last_valid_index: non-NaN).
     let mut last_valid = [None::<u64>; 4];
@@ -185,10 +203,10 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
     let mut complete = 0u64;
     let mut last_incomplete = None::<(u64, &'static str)>;
     let mut breaker = None;
-    while let Some(row) = reader.next_row()? {
+    for row in samples {
+        let (line, s) = row?;
         let i = rows;
         rows += 1;
-        let s = row.sample;
         for (slot, v) in last_valid
             .iter_mut()
             .zip([s.t, s.force, s.velocity, s.acceleration])
@@ -205,20 +223,15 @@ pub fn find_window<R: BufRead>(reader: &mut TsvReader<R>) -> Result<Window, FitE
             run_end = Some(i);
             complete += 1;
         } else {
-            last_incomplete = Some((reader.line_number(), first_non_finite(&s)));
+            last_incomplete = Some((line, first_non_finite(&s)));
         }
     }
     if rows == 0 {
-        return Err(InputError(format!(
-            "{}: no data rows after the header",
-            reader.source_name()
-        ))
-        .into());
+        return Err(InputError(format!("{name}: no data rows after the header")).into());
     }
     let (Some(start), Some(end)) = (run_start, run_end) else {
         return Err(InputError(format!(
-            "{}: no row has finite t, force, velocity and acceleration",
-            reader.source_name()
+            "{name}: no row has finite t, force, velocity and acceleration"
         ))
         .into());
     };
@@ -392,37 +405,26 @@ fn fit_bytes(
         breaker: if complete > run_rows { breaker } else { None },
     };
     // The sums of rows first..=last: the block the cut falls in is parsed again.
-    let mut skip = first - run_start;
-    let mut total: Option<LoadEstimator<f64>> = None;
-    let mut start = (0usize, 0u64, 0u64); // (offset, line, rows to skip there)
-    for k in &parts {
-        for b in &chunks[*k].run {
-            let line = line_base[*k] + b.line;
-            if let Some(t) = &mut total {
-                t.merge(&b.sums);
-            } else if skip >= b.rows {
-                skip -= b.rows;
-            } else if skip == 0 {
-                total = Some(b.sums);
-                start = (b.offset, line, 0);
-            } else {
-                let mut est = LoadEstimator::new();
-                walk(
-                    data,
-                    b.offset,
-                    skip,
-                    b.rows - skip,
-                    &layout,
-                    scan::FIT_SLOTS,
-                    |_, v| {
-                        est.update(v[2], v[3], v[4]);
-                    },
-                );
-                total = Some(est);
-                start = (b.offset, line, skip);
-            }
-        }
-    }
+    let blocks = parts
+        .iter()
+        .flat_map(|k| chunks[*k].run.blocks.iter().map(|b| (line_base[*k], b)));
+    let resum = |b: &scan::Block, skip: u64| {
+        let mut est = LoadEstimator::new();
+        walk(
+            data,
+            b.offset,
+            skip,
+            b.rows - skip,
+            &layout,
+            scan::FIT_SLOTS,
+            |_, v| {
+                est.update(v[2], v[3], v[4]);
+            },
+        );
+        est
+    };
+    let (total, start) = scan::sums_from(blocks, first - run_start, resum).unzip();
+    let start = start.unwrap_or((0, 0, 0)); // (offset, line, rows to skip there)
     let estimator = total.unwrap_or_default();
     let n = last - first + 1;
     // Rows of the window, in order, with their line numbers.

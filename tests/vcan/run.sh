@@ -62,7 +62,8 @@ chmod +x "$root/init"
 (cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) > "$work/initrd.gz"
 timeout 300 qemu-system-x86_64 -accel tcg -m 512 -kernel "$kernel" -initrd "$work/initrd.gz" \
   -append "console=ttyS0 panic=-1 quiet" -nographic -no-reboot > "$work/console.log" 2>&1 || true
-grep '^VCAN-' "$work/console.log" | tr -d '\r' | tee "$work/result.txt"
+# -o: a marker line can follow console noise on the same line (kernel messages, the shell's echo).
+tr -d '\r' < "$work/console.log" | grep -o 'VCAN-.*' | tee "$work/result.txt"
 r=$work/result.txt
 fail() { echo "vcan test FAILED: $*" >&2; exit 1; }
 grep -q VCAN-DONE "$r" || fail "the VM did not finish (console: $(tail -n 20 "$work/console.log"))"

@@ -25,7 +25,7 @@ use propid_drive_proto::drive::DriveConfig;
 use propid_drive_proto::sim_drive::{SimDrive, SimDriveConfig};
 use propid_drive_proto::StopReason;
 
-use crate::settings::{command_args, number, setting, ConfigErrors, Names};
+use crate::settings::{command_args, setting, ConfigErrors, Names};
 use propid_drive_proto::excitation::Schedule;
 use propid_drive_proto::settings::{InitDuration, PatternDuration};
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
@@ -37,13 +37,11 @@ setting! {
     /// The demo's pattern duration.
     DemoDuration: PatternDuration = Names::flag("duration"),
         "Pattern duration [s] (real time) [default: 20]",
-        |text: &str| number(text, PatternDuration::new);
-}
-setting! {
+        within PatternDuration;
     /// The demo's init phase.
     DemoInit: InitDuration = Names::flag("init-duration"),
         "Init phase at the high setpoint [s] [default: 2]",
-        |text: &str| number(text, InitDuration::new);
+        within InitDuration;
 }
 
 command_args! {

@@ -27,7 +27,7 @@ use propid_science::excitation::{Excitation, Pattern};
 
 use crate::bus::{Bus, BusArgs};
 use crate::settings::{
-    command_args, environment, fill, number, numbers, setpoint_range, setting, ConfigError,
+    checked, command_args, environment, fill, numbers, setpoint_range, setting, ConfigError,
     ConfigErrors, Names, Problem, RegisterFile,
 };
 use crate::InputError;
@@ -38,8 +38,6 @@ setting! {
         Names::register("node-id", registers::NODE_ID, "UAVCAN__NODE__ID"),
         "This node's ID",
         crate::settings::node_id;
-}
-setting! {
     /// This node's description (register and environment only).
     Description: String = Names {
         flag: None,
@@ -48,75 +46,53 @@ setting! {
     },
         "This node's description",
         |text: &str| Ok(text.to_string());
-}
-setting! {
     /// The readiness publisher's subject.
     ReadinessId: Option<SubjectId> =
         Names::register("readiness-id", registers::DRIVE_READINESS_ID, "UAVCAN__PUB__READINESS__ID"),
         "Subject-ID of the readiness publisher; none is published when unset",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint publisher's subject.
     SetpointId: Option<SubjectId> =
         Names::register("setpoint-id", registers::DRIVE_SETPOINT_ID, "UAVCAN__PUB__SP_RAT__ID"),
         "Subject-ID of the ratiometric setpoint publisher",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback subscriber's subject.
     FeedbackId: Option<SubjectId> =
         Names::register("feedback-id", registers::DRIVE_FEEDBACK_ID, "UAVCAN__SUB__FB_DYN__ID"),
         "Subject-ID of the dynamics feedback subscriber",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint range.
     LoHi: SetpointRange =
         Names::register("setpoint-rat-lo-hi", registers::SETPOINT_RAT_LO_HI, "SETPOINT_RAT_LO_HI"),
         "Setpoint range \"LO HI\", ratiometric, -1 ≤ LO < HI ≤ 1 [default: 0.1 0.9]",
         setpoint_range;
-}
-setting! {
     /// The pattern's period.
     PeriodSetting: Period = Names::register("period", registers::PERIOD, "PERIOD"),
         "Period of the sinusoid [s] [default: 2]",
-        |text: &str| number(text, Period::new);
-}
-setting! {
+        within Period;
     /// The pattern's duration.
     PatternDurationSetting: PatternDuration =
         Names::register("pattern-duration", registers::PATTERN_DURATION, "PATTERN_DURATION"),
         "Duration of the pattern [s] [default: 200]",
-        |text: &str| number(text, PatternDuration::new);
-}
-setting! {
+        within PatternDuration;
     /// The init phase's duration.
     InitDurationSetting: InitDuration =
         Names::register("init-duration", registers::INIT_DURATION, "INIT_DURATION"),
         "Duration of the initial run at the high setpoint [s] [default: 5]",
-        |text: &str| number(text, InitDuration::new);
-}
-setting! {
+        within InitDuration;
     /// The setpoint publication period.
     SetpointPeriodSetting: SetpointPeriod =
         Names::register("setpoint-period", registers::SETPOINT_PERIOD, "SETPOINT_PERIOD"),
         "Setpoint publication period [s] [default: 0.005]",
-        |text: &str| number(text, SetpointPeriod::new);
-}
-setting! {
+        within SetpointPeriod;
     /// The deadman timeout.
     DeadmanSetting: Deadman = Names::flag("deadman"),
         "Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s] [default: 0.5]",
-        |text: &str| number(text, Deadman::new);
-}
-setting! {
+        within Deadman;
     /// The drive whose heartbeat is watched.
     DriveNodeId: NodeId = Names::flag("drive-node-id"),
         "Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of the first feedback message)",
         |text: &str| text.parse::<NodeId>().map_err(Problem::Id);
-}
-setting! {
     /// The precision to stop at.
     UntilStderr: RelativeError = Names::flag("until-stderr"),
         "Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at most this many percent; the pattern duration is then the longest the run may take",
@@ -125,6 +101,31 @@ setting! {
             let p = crate::settings::seconds_in(text, percent)?;
             RelativeError::new(p / 100.0).map_err(|_| Problem::Range(RangeError { range: percent, got: p }))
         };
+    /// The highest speed allowed.
+    MaxSpeedSetting: Option<MaxSpeed> =
+        Names::register("max-speed", registers::MAX_SPEED, "MAX_SPEED"),
+        "The highest speed the rotor may reach: rad/s, or rpm (12000rpm); 0: none [default: none: give your propeller's rated speed]",
+        |text: &str| speed_or_none(text, MaxSpeed::new);
+    /// The soft start's setpoint.
+    SoftStartSetpointSetting: SoftStartSetpoint =
+        Names::register("soft-start-setpoint", registers::SOFT_START_SETPOINT, "SOFT_START_SETPOINT"),
+        "The soft start's setpoint: a ratiometric magnitude in (0, 1], applied in the direction of hi, at most |hi| [default: 0.1]",
+        within SoftStartSetpoint;
+    /// The soft start's duration.
+    SoftStartDurationSetting: Option<SoftStartDuration> =
+        Names::register("soft-start-duration", registers::SOFT_START_DURATION, "SOFT_START_DURATION"),
+        "How long the soft start lasts before the init phase [s]; feedback must arrive and the rotor speed up the commanded way; 0: no soft start [default: 1]",
+        |text: &str| seconds_or_none(text, SoftStartDuration::new);
+    /// The ramp's duration.
+    RampDurationSetting: Option<RampDuration> =
+        Names::register("ramp-duration", registers::RAMP_DURATION, "RAMP_DURATION"),
+        "A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0: none [default: 0]",
+        |text: &str| seconds_or_none(text, RampDuration::new);
+    /// The speed watchdog's margin.
+    SpeedWatchdogSetting: Option<WatchdogMargin> =
+        Names::register("speed-watchdog", registers::SPEED_WATCHDOG, "SPEED_WATCHDOG"),
+        "The speed watchdog: how far the speed may run past what the reported torque can drive it, rad/s or rpm; 0: off [default: 50]",
+        |text: &str| speed_or_none(text, WatchdogMargin::new);
 }
 
 /// What a speed's text must be.
@@ -155,42 +156,6 @@ fn seconds_or_none<T>(
         return Ok(None);
     }
     make(v).map(Some).map_err(Problem::Range)
-}
-
-setting! {
-    /// The highest speed allowed.
-    MaxSpeedSetting: Option<MaxSpeed> =
-        Names::register("max-speed", registers::MAX_SPEED, "MAX_SPEED"),
-        "The highest speed the rotor may reach: rad/s, or rpm (12000rpm); 0: none [default: none: give your propeller's rated speed]",
-        |text: &str| speed_or_none(text, MaxSpeed::new);
-}
-setting! {
-    /// The soft start's setpoint.
-    SoftStartSetpointSetting: SoftStartSetpoint =
-        Names::register("soft-start-setpoint", registers::SOFT_START_SETPOINT, "SOFT_START_SETPOINT"),
-        "The soft start's setpoint: a ratiometric magnitude in (0, 1], applied in the direction of hi, at most |hi| [default: 0.1]",
-        |text: &str| number(text, SoftStartSetpoint::new);
-}
-setting! {
-    /// The soft start's duration.
-    SoftStartDurationSetting: Option<SoftStartDuration> =
-        Names::register("soft-start-duration", registers::SOFT_START_DURATION, "SOFT_START_DURATION"),
-        "How long the soft start lasts before the init phase [s]; feedback must arrive and the rotor speed up the commanded way; 0: no soft start [default: 1]",
-        |text: &str| seconds_or_none(text, SoftStartDuration::new);
-}
-setting! {
-    /// The ramp's duration.
-    RampDurationSetting: Option<RampDuration> =
-        Names::register("ramp-duration", registers::RAMP_DURATION, "RAMP_DURATION"),
-        "A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0: none [default: 0]",
-        |text: &str| seconds_or_none(text, RampDuration::new);
-}
-setting! {
-    /// The speed watchdog's margin.
-    SpeedWatchdogSetting: Option<WatchdogMargin> =
-        Names::register("speed-watchdog", registers::SPEED_WATCHDOG, "SPEED_WATCHDOG"),
-        "The speed watchdog: how far the speed may run past what the reported torque can drive it, rad/s or rpm; 0: off [default: 50]",
-        |text: &str| speed_or_none(text, WatchdogMargin::new);
 }
 
 command_args! {
@@ -426,53 +391,12 @@ impl TryFrom<Raw> for Settings {
             Some(Ok(played)) => Some(Some(played)),
             None => Some(None),
         };
-        let (
-            Some(node_id),
-            Some(description),
-            Some(bus),
-            Some(readiness_id),
-            Some(setpoint_id),
-            Some(feedback_id),
-            Some(range),
-            Some(period),
-            Some(duration),
-            Some(init_duration),
-            Some(setpoint_period),
-            Some(deadman),
-            Some(drive_node_id),
-            Some(until),
-            Some(from_file),
-            Some(max_speed),
-            Some(soft_start_setpoint),
-            Some(soft_start_duration),
-            Some(ramp),
-            Some(watchdog),
-        ) = (
-            node_id,
-            description,
-            bus,
-            readiness_id,
-            setpoint_id,
-            feedback_id,
-            range,
-            period,
-            duration,
-            init_duration,
-            setpoint_period,
-            deadman,
-            drive_node_id,
-            until,
-            from_file,
-            max_speed,
-            soft_start_setpoint,
-            soft_start_duration,
-            ramp,
-            watchdog,
-        )
-        else {
-            return Err(errors);
-        };
-        errors.check()?;
+        checked!(
+            errors;
+            node_id, description, bus, readiness_id, setpoint_id, feedback_id, range, period,
+            duration, init_duration, setpoint_period, deadman, drive_node_id, until, from_file,
+            max_speed, soft_start_setpoint, soft_start_duration, ramp, watchdog,
+        );
         let played = from_file.unwrap_or_else(|| {
             let schedule = Schedule {
                 range,

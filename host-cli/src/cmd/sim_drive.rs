@@ -23,7 +23,7 @@ use crate::bus::{Bus, BusArgs};
 use crate::cmd::drive::NodeIdSetting;
 use crate::cmd::sim::StandArgs;
 use crate::settings::{
-    command_args, environment, fill, number, setting, ConfigErrors, Names, Problem,
+    checked, command_args, environment, fill, setting, ConfigErrors, Names, Problem,
 };
 
 setting! {
@@ -32,36 +32,26 @@ setting! {
         Names::register("readiness-id", TELEGA_READINESS_ID, "UAVCAN__SUB__READINESS__ID"),
         "Readiness subject (no readiness gating when unset)",
         crate::settings::subject_id;
-}
-setting! {
     /// The setpoint subscription.
     SetpointId: Option<SubjectId> =
         Names::register("setpoint-id", TELEGA_SETPOINT_ID, "UAVCAN__SUB__SETPOINT_R_TORQ__ID"),
         "Ratiometric torque setpoint subject [default: 24]",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback publication.
     FeedbackId: Option<SubjectId> =
         Names::register("feedback-id", TELEGA_FEEDBACK_ID, "UAVCAN__PUB__DYNAMICS__ID"),
         "Dynamics feedback subject [default: 110]",
         crate::settings::subject_id;
-}
-setting! {
     /// The feedback interval.
     Interval: FeedbackInterval =
         Names::register("interval", PUB_INTERVAL_MIN, "MNS__PUB_INTERVAL_MIN"),
         "Feedback interval [s], writable over the bus [default: 0.002]",
-        |text: &str| number(text, FeedbackInterval::new);
-}
-setting! {
+        within FeedbackInterval;
     /// Local timestamps.
     LocalTimestamp: bool =
         Names::register("local-timestamp", LOCAL_TIMESTAMP, "MNS__LOCAL_TIMESTAMP"),
         "Stamp the feedback with the drive's clock (false: the timestamp is 0, unknown) [default: true]",
         crate::settings::bit;
-}
-setting! {
     /// How long to run.
     Duration: Option<RunLimit> = Names::flag("duration"),
         "Stop after this many seconds (0: run until interrupted) [default: 0]",
@@ -69,13 +59,10 @@ setting! {
             [0.0] => Ok(None),
             [x] => RunLimit::new(x).map(Some).map_err(Problem::Range),
         };
-}
-
-setting! {
     /// The simulated motor's torque per commanded torque.
     TorqueScaleSetting: TorqueScale = Names::flag("torque-scale"),
         "The torque the simulated motor makes per torque it is commanded and reports: -1 reverses its sign (a motor wired the other way), 0 makes none; for trying propid drive's limits [default: 1]",
-        |text: &str| number(text, TorqueScale::new);
+        within TorqueScale;
 }
 
 command_args! {
@@ -145,31 +132,11 @@ impl TryFrom<Args> for Settings {
         let local_timestamp = e.or(local_timestamp, true);
         let duration = e.or(duration, None);
         let torque_scale = e.or(torque_scale, TorqueScale::from_const(1.0));
-        let (
-            Some(node_id),
-            Some(bus),
-            Some(readiness_id),
-            Some(setpoint_id),
-            Some(feedback_id),
-            Some(interval),
-            Some(local_timestamp),
-            Some(duration),
-            Some(torque_scale),
-        ) = (
-            node_id,
-            bus,
-            readiness_id,
-            setpoint_id,
-            feedback_id,
-            interval,
-            local_timestamp,
-            duration,
-            torque_scale,
-        )
-        else {
-            return Err(errors);
-        };
-        errors.check()?;
+        checked!(
+            errors;
+            node_id, bus, readiness_id, setpoint_id, feedback_id, interval, local_timestamp,
+            duration, torque_scale,
+        );
         let sim = SimDriveConfig {
             node_id,
             mtu: bus.mtu,

@@ -14,7 +14,7 @@ use propid_core::estimate::LoadEstimator;
 use propid_io::tsv::{Layout, RowError};
 
 /// Rows per block at first (small in tests, so that they merge blocks and cut inside them).
-const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
+pub(super) const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
 /// Blocks per run before neighbours are merged (the block size doubles).
 const MAX_BLOCKS: usize = if cfg!(test) { 8 } else { 1024 };
 /// The slots the fit converts: force, velocity, acceleration. The others (ts_local, t,
@@ -36,6 +36,92 @@ pub(super) struct Block {
     pub sums: LoadEstimator<f64>,
 }
 
+/// A run of complete rows as blocks with their sums: [`BLOCK_ROWS`] rows per block at first,
+/// neighbours merged in pairs (the block size doubling) when there are [`MAX_BLOCKS`], so memory
+/// stays bounded. The file scan and the in-memory columns ([`super::fit_columns`]) form the same
+/// blocks, so the same rows give the same sums to the last bit.
+#[derive(Debug)]
+pub(super) struct Run {
+    /// The blocks, in order.
+    pub blocks: Vec<Block>,
+    /// Rows per block from now on.
+    block_rows: u64,
+}
+
+impl Default for Run {
+    fn default() -> Self {
+        Run {
+            blocks: Vec::new(),
+            block_rows: BLOCK_ROWS,
+        }
+    }
+}
+
+impl Run {
+    /// Starts a new run (the allocation is kept).
+    pub fn clear(&mut self) {
+        self.blocks.clear();
+        self.block_rows = BLOCK_ROWS;
+    }
+
+    /// Adds a row (force, velocity, acceleration) found at `offset` on `line`.
+    pub fn push(&mut self, offset: usize, line: u64, force: f64, velocity: f64, acceleration: f64) {
+        if self.blocks.last().is_none_or(|b| b.rows >= self.block_rows) {
+            if self.blocks.len() == MAX_BLOCKS {
+                self.blocks = self
+                    .blocks
+                    .chunks(2)
+                    .map(|pair| {
+                        let mut b = pair[0].clone();
+                        if let Some(next) = pair.get(1) {
+                            b.rows += next.rows;
+                            b.sums.merge(&next.sums);
+                        }
+                        b
+                    })
+                    .collect();
+                self.block_rows *= 2;
+            }
+            self.blocks.push(Block {
+                rows: 0,
+                offset,
+                line,
+                sums: LoadEstimator::new(),
+            });
+        }
+        if let Some(b) = self.blocks.last_mut() {
+            b.sums.update(force, velocity, acceleration);
+            b.rows += 1;
+        }
+    }
+}
+
+/// The sums of a run's rows from its `skip`-th row on: the blocks before the cut are skipped, the
+/// block it falls in is summed again from the cut by `resum(block, rows to skip in it)`, the
+/// blocks after it are merged whole. The blocks come with the line number their `line` counts
+/// from. Also returns where the sums start: (offset, line, rows to skip there). `None` when the
+/// cut lies beyond the run.
+pub(super) fn sums_from<'a>(
+    blocks: impl Iterator<Item = (u64, &'a Block)>,
+    mut skip: u64,
+    mut resum: impl FnMut(&Block, u64) -> LoadEstimator<f64>,
+) -> Option<(LoadEstimator<f64>, (usize, u64, u64))> {
+    let mut total: Option<(LoadEstimator<f64>, (usize, u64, u64))> = None;
+    for (line_base, b) in blocks {
+        let line = line_base + b.line;
+        if let Some((t, _)) = &mut total {
+            t.merge(&b.sums);
+        } else if skip >= b.rows {
+            skip -= b.rows;
+        } else if skip == 0 {
+            total = Some((b.sums, (b.offset, line, 0)));
+        } else {
+            total = Some((resum(b, skip), (b.offset, line, skip)));
+        }
+    }
+    total
+}
+
 /// What one chunk of lines holds, as far as the seed's window is concerned.
 #[derive(Debug, Default)]
 pub(super) struct Chunk {
@@ -46,7 +132,7 @@ pub(super) struct Chunk {
     /// Rows with finite t, force, velocity, acceleration.
     pub complete: u64,
     /// The chunk's last run of complete rows.
-    pub run: Vec<Block>,
+    pub run: Run,
     /// Rows in `run`.
     pub run_rows: u64,
     /// Local index of the run's first row.
@@ -124,7 +210,6 @@ pub(super) fn scan(
     mut tick: impl FnMut(),
 ) -> Result<Chunk, (u64, RowError)> {
     let mut c = Chunk::default();
-    let mut block_rows = BLOCK_ROWS;
     let mut in_run = false;
     let mut error = None;
     let mut released = start;
@@ -159,35 +244,8 @@ pub(super) fn scan(
             c.run_first_row = row;
             c.run_open_at_start = row == 0;
             c.breaker = c.last_incomplete;
-            block_rows = BLOCK_ROWS;
         }
-        if c.run.last().is_none_or(|b| b.rows >= block_rows) {
-            if c.run.len() == MAX_BLOCKS {
-                c.run = c
-                    .run
-                    .chunks(2)
-                    .map(|pair| {
-                        let mut b = pair[0].clone();
-                        if let Some(next) = pair.get(1) {
-                            b.rows += next.rows;
-                            b.sums.merge(&next.sums);
-                        }
-                        b
-                    })
-                    .collect();
-                block_rows *= 2;
-            }
-            c.run.push(Block {
-                rows: 0,
-                offset,
-                line,
-                sums: LoadEstimator::new(),
-            });
-        }
-        if let Some(b) = c.run.last_mut() {
-            b.sums.update(v[2], v[3], v[4]);
-            b.rows += 1;
-        }
+        c.run.push(offset, line, v[2], v[3], v[4]);
         c.run_rows += 1;
         true
     });
