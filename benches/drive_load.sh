@@ -23,6 +23,7 @@ set -euo pipefail
 shopt -s inherit_errexit
 cd "$(dirname "$0")/.."
 . benches/common.sh
+. ci/lib.sh
 RUNS=${RUNS:-3}
 PATTERN_S=${PATTERN_S:-20}
 LOAD_PER_CORE=${LOAD_PER_CORE:-2}
@@ -38,13 +39,7 @@ relay=""
 if chrt -r 10 true 2>/dev/null; then relay="chrt -r 10"; fi
 
 work=$(mktemp -d)
-pids=()
-cleanup() {
-    for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-    wait 2>/dev/null || true
-    rm -rf "$work"
-}
-trap cleanup EXIT
+clean_at_exit "$work"
 
 busy() {
     local n=$(( $(nproc) * LOAD_PER_CORE ))

@@ -13,14 +13,9 @@ bin=$(realpath "${1:-$repo/target/release/propid}")
 [ -x "$bin" ] || { echo "readme_hardware: no propid at $bin (cargo build --release -p propid)" >&2; exit 1; }
 command -v socat >/dev/null || { echo "readme_hardware: needs socat" >&2; exit 1; }
 
+. "$repo/ci/lib.sh"
 work=$(mktemp -d)
-pids=()
-cleanup() {
-    for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
-    wait 2>/dev/null || true
-    rm -rf "$work"
-}
-trap cleanup EXIT
+clean_at_exit "$work"
 
 # The commands: the ```sh blocks of the section, continuation lines joined.
 awk '/^## With hardware/ { on = 1; next } /^## / { on = 0 }

@@ -127,6 +127,19 @@ impl SimDriveThread {
         *seen
     }
 
+    /// Stops it once it has received the stop commands a driver reports it sent (or `timeout`
+    /// passed, [`SimDriveThread::wait_for_stop_commands`]): what it received of them, and what it
+    /// saw.
+    pub fn stop_after_stop_commands(
+        self,
+        standby: u32,
+        zero_setpoints: u32,
+        timeout: Duration,
+    ) -> (StopCommandsSeen, Result<SimDriveSummary, String>) {
+        let seen = self.wait_for_stop_commands(standby, zero_setpoints, timeout);
+        (seen, self.stop())
+    }
+
     /// Stops it and returns what it saw (or its loop's error).
     pub fn stop(self) -> Result<SimDriveSummary, String> {
         self.stop.store(true, Ordering::Relaxed);

@@ -142,20 +142,20 @@ fn run(fault: Fault) {
         },
     );
     let r = &outcome.report;
+    let (seen, summary) = sim.stop_after_stop_commands(
+        r.standby_sent,
+        r.zero_setpoints_sent,
+        Duration::from_secs(10),
+    );
+    let summary = summary.unwrap();
     if fault != Fault::Vanished {
         // Everything the drive says it sent reaches the simulated drive.
-        let seen = sim.wait_for_stop_commands(
-            r.standby_sent,
-            r.zero_setpoints_sent,
-            Duration::from_secs(10),
-        );
         assert_eq!(
             (seen.standby, seen.zero_setpoints),
             (u64::from(r.standby_sent), u64::from(r.zero_setpoints_sent)),
             "{r:?}"
         );
     }
-    let summary = sim.stop().unwrap();
     let rows = String::from_utf8(out).unwrap().lines().count() - 1;
     assert_eq!(rows as u64, r.rows, "every row reached the output");
     assert!(rows >= 500, "{rows}");

@@ -118,22 +118,20 @@ fn the_soft_start_and_a_ramp_come_before_the_seeds_init() {
         })
         .collect();
     // float16 on the wire: 0.1 → 0.0999756, 0.9 → 0.8999023.
-    let soft: Vec<f32> = sp.iter().filter(|(t, _)| *t < 1.0).map(|x| x.1).collect();
+    let window = |from: f64, to: f64| -> Vec<f32> {
+        sp.iter()
+            .filter(|(t, _)| (from..to).contains(t))
+            .map(|x| x.1)
+            .collect()
+    };
+    let soft = window(0.0, 1.0);
     assert_eq!(soft.len(), 200);
     assert!(soft.iter().all(|v| (v - 0.1).abs() < 1e-3), "{soft:?}");
-    let ramp: Vec<f32> = sp
-        .iter()
-        .filter(|(t, _)| (1.0..2.0).contains(t))
-        .map(|x| x.1)
-        .collect();
+    let ramp = window(1.0, 2.0);
     assert_eq!(ramp.len(), 200);
     assert!(ramp.windows(2).all(|w| w[1] >= w[0]), "{ramp:?}");
     assert!(ramp[0] < 0.11 && ramp[199] > 0.89, "{ramp:?}");
-    let init: Vec<f32> = sp
-        .iter()
-        .filter(|(t, _)| (2.0..7.0).contains(t))
-        .map(|x| x.1)
-        .collect();
+    let init = window(2.0, 7.0);
     assert_eq!(init.len(), 1000);
     assert!(init.iter().all(|v| (v - 0.9).abs() < 1e-3));
     assert_standby_first(&run, 27.0);

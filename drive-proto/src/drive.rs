@@ -523,6 +523,13 @@ impl Drive {
         }
     }
 
+    /// The dead-man's stop, when no feedback came for longer than it allows.
+    fn lost_feedback(&self, now: Instant) -> Option<StopReason> {
+        let deadman = self.cfg.deadman.get();
+        let silent = now.saturating_duration_since(self.last_feedback);
+        (silent.as_secs_f64() > deadman).then_some(StopReason::LostFeedback { deadman })
+    }
+
     /// Torque is commanded (the soft start to the end of the pattern).
     fn is_driving(&self) -> bool {
         matches!(
@@ -607,20 +614,12 @@ impl Drive {
         if self.phase == Phase::Ramp && now >= self.ramp_end {
             self.phase = Phase::Init;
         }
-        if matches!(self.phase, Phase::SoftStart | Phase::Ramp | Phase::Init)
-            && self.fed
-            && now
-                .saturating_duration_since(self.last_feedback)
-                .as_secs_f64()
-                > self.cfg.deadman.get()
-        {
-            self.stop(
-                now,
-                StopReason::LostFeedback {
-                    deadman: self.cfg.deadman.get(),
-                },
-            );
-            return;
+        // Before the pattern, the dead-man watches once feedback has come.
+        if matches!(self.phase, Phase::SoftStart | Phase::Ramp | Phase::Init) && self.fed {
+            if let Some(lost) = self.lost_feedback(now) {
+                self.stop(now, lost);
+                return;
+            }
         }
         if self.phase == Phase::Init && now >= self.init_end {
             self.phase = Phase::Pattern;
@@ -633,17 +632,8 @@ impl Drive {
             let elapsed = self.elapsed(now);
             if elapsed >= self.cfg.excitation.schedule().duration.get() {
                 self.stop(now, StopReason::Completed);
-            } else if now
-                .saturating_duration_since(self.last_feedback)
-                .as_secs_f64()
-                > self.cfg.deadman.get()
-            {
-                self.stop(
-                    now,
-                    StopReason::LostFeedback {
-                        deadman: self.cfg.deadman.get(),
-                    },
-                );
+            } else if let Some(lost) = self.lost_feedback(now) {
+                self.stop(now, lost);
             } else if now >= self.next_progress {
                 let precise = self.cfg.until_rel_stderr.and_then(|target| {
                     let target = target.get();

@@ -19,16 +19,28 @@ pub trait Plant: Send {
 /// A plant whose drive applies `scale` times the torque it is commanded and reports: a torque
 /// sign reversed (−1), a wrong torque constant (≠ 1), or a motor that makes no torque (0, and
 /// reports none). Otherwise the reported torque stays the commanded one, as a drive that believes
-/// its own scale reports it.
+/// its own scale reports it — unless [`TorqueScaled::reporting`] scales the report too (a torque
+/// reported with the wrong sign).
 pub struct TorqueScaled {
     inner: Box<dyn Plant>,
     scale: f64,
+    reported: f64,
 }
 
 impl TorqueScaled {
     /// `inner` driven with `scale` times the commanded torque.
     pub fn new(inner: Box<dyn Plant>, scale: f64) -> Self {
-        TorqueScaled { inner, scale }
+        TorqueScaled {
+            inner,
+            scale,
+            reported: 1.0,
+        }
+    }
+
+    /// The same, reporting `reported` times the torque it would report (−1: the feedback's
+    /// torque sign reversed).
+    pub fn reporting(self, reported: f64) -> Self {
+        TorqueScaled { reported, ..self }
     }
 }
 
@@ -52,6 +64,7 @@ impl Plant for TorqueScaled {
         if self.scale != 0.0 {
             s.force /= self.scale;
         }
+        s.force *= self.reported;
         s
     }
 }

@@ -62,13 +62,13 @@ fn start_telega(port: TTYPort) -> SimDriveThread {
 /// Stops the simulated Telega once it has received the stop commands the driver says it sent
 /// (`standby`, `zero`); what it saw.
 fn stop_after_stop_commands(telega: SimDriveThread, standby: u32, zero: u32) -> SimDriveSummary {
-    let seen = telega.wait_for_stop_commands(standby, zero, Duration::from_secs(10));
+    let (seen, summary) = telega.stop_after_stop_commands(standby, zero, Duration::from_secs(10));
     assert_eq!(
         (seen.standby, seen.zero_setpoints),
         (u64::from(standby), u64::from(zero)),
         "every stop command the driver sent arrived"
     );
-    telega.stop().unwrap()
+    summary.unwrap()
 }
 
 /// The driver's transport, recording every frame it accepted.

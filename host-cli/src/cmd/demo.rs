@@ -144,12 +144,12 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // The simulated drive stops once the stop commands the driver sent have arrived (the bound
     // is for a lost frame, which the check below then reports).
     let r = &outcome.report;
-    telega.wait_for_stop_commands(
+    let (_, summary) = telega.stop_after_stop_commands(
         r.standby_sent,
         r.zero_setpoints_sent,
         std::time::Duration::from_secs(5),
     );
-    let summary = telega.stop().map_err(anyhow::Error::msg)?;
+    let summary = summary.map_err(anyhow::Error::msg)?;
     let standby_last =
         summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);
     eprintln!(
