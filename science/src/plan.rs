@@ -83,7 +83,7 @@ impl Prior {
     pub fn check(&self) -> Result<(), InputError> {
         self.stand().validate()?;
         if self.c2.is_nan() || self.c2 <= 0.0 {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "the prior's c2 must be positive (got {}): a plan needs some drag to aim at",
                 self.c2
             )));
@@ -305,7 +305,7 @@ pub fn evaluate(
         est.update(s.force, s.velocity, s.acceleration);
     }
     let e = est.estimate(&LoadBounds::default()).map_err(|_| {
-        InputError(format!(
+        InputError::invalid(format!(
             "the {} pattern does not identify the load (the regressors are degenerate)",
             excitation.pattern
         ))
@@ -343,18 +343,18 @@ pub fn design(
 ) -> Result<Plan, InputError> {
     prior.check()?;
     if !(constraints.max_duration > 0.0 && constraints.max_duration.is_finite()) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the longest duration must be positive (got {} s)",
             constraints.max_duration
         )));
     }
     if let Some(s) = constraints.max_speed.filter(|s| s.is_nan() || *s <= 0.0) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the largest speed must be positive (got {s} rad/s)"
         )));
     }
     if let Some(t) = target_rel_stderr.filter(|t| !(*t > 0.0 && *t < 1.0)) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the target relative standard error must be in (0, 1) (got {t})"
         )));
     }
@@ -407,8 +407,9 @@ pub fn design(
         .filter(|c| c.allowed)
         .min_by(|a, b| cost(&a.precision).total_cmp(&cost(&b.precision)))
         .ok_or_else(|| {
-            InputError(
-                "no pattern stays within the speed limit at this setpoint range: lower hi".into(),
+            InputError::invalid(
+                "no pattern stays within the speed limit at this setpoint range: lower hi"
+                    .to_string(),
             )
         })?
         .clone();
@@ -450,7 +451,7 @@ pub fn to_file(plan: &Plan) -> String {
 /// Reads a pattern file: the excitation to play, checked.
 pub fn excitation_from_file(text: &str, name: &str) -> Result<Excitation, InputError> {
     let plan: Plan = serde_json::from_str(text).map_err(|e| {
-        InputError(format!(
+        InputError::invalid(format!(
             "{name}: line {}, column {}: not a propid plan ({e})",
             e.line(),
             e.column()
@@ -458,7 +459,7 @@ pub fn excitation_from_file(text: &str, name: &str) -> Result<Excitation, InputE
     })?;
     plan.excitation
         .validate()
-        .map_err(|e| InputError(format!("{name}: {}", e.0)))?;
+        .map_err(|e| InputError::invalid(format!("{name}: {e}")))?;
     Ok(plan.excitation)
 }
 
@@ -607,6 +608,6 @@ mod tests {
             plan.excitation
         );
         let e = excitation_from_file("{\n  \"prior\": 3\n}", "p.json").unwrap_err();
-        assert!(e.0.starts_with("p.json: line 2"), "{e}");
+        assert!(e.to_string().starts_with("p.json: line 2"), "{e}");
     }
 }

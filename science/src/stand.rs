@@ -26,6 +26,9 @@ use propid_io::InputError;
 
 use crate::excitation::Excitation;
 
+mod drivetrain;
+pub use drivetrain::{Drivetrain, DrivetrainConfig, DrivetrainSample, Electrical};
+
 /// Everything about the simulated stand.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct StandConfig {
@@ -104,7 +107,9 @@ impl StandConfig {
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be positive (got {v})")));
+                return Err(InputError::invalid(format!(
+                    "{name} must be positive (got {v})"
+                )));
             }
         }
         let non_negative = [
@@ -121,7 +126,7 @@ impl StandConfig {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
         }
         Ok(())
@@ -158,6 +163,8 @@ pub struct Stand {
     force_sensor: FirstOrderLag<f64>,
     acceleration_sensor: FirstOrderLag<f64>,
     rng: StdRng,
+    /// Thrust and motor, when simulated ([`Stand::with_drivetrain`]).
+    drivetrain: Option<Drivetrain>,
 }
 
 fn normal(sigma: f64) -> Normal<f64> {
@@ -176,7 +183,21 @@ impl Stand {
             acceleration_sensor: FirstOrderLag::new(config.acceleration_lag, 0.0),
             rng: StdRng::seed_from_u64(seed),
             config,
+            drivetrain: None,
         }
+    }
+
+    /// Simulates a thrust cell and the motor's electrical side too (seeded from `seed`, apart
+    /// from the stand's own noise: no other column changes).
+    pub fn with_drivetrain(mut self, config: DrivetrainConfig, seed: u64) -> Self {
+        self.drivetrain = Some(Drivetrain::new(config, seed));
+        self
+    }
+
+    /// What the stand logs beside the drive's feedback now (`None` without a drivetrain).
+    pub fn measure_drivetrain(&mut self) -> Option<DrivetrainSample> {
+        let (omega, torque) = (self.load.velocity, self.motor_torque());
+        self.drivetrain.as_mut().map(|d| d.measure(omega, torque))
     }
 
     /// The configuration.
@@ -235,6 +256,10 @@ impl Stand {
             self.acceleration_sensor.step(dt, a);
             self.load.step(dt, felt);
             self.time += dt;
+            let (omega, torque) = (self.load.velocity, self.motor_torque());
+            if let Some(d) = &mut self.drivetrain {
+                d.step(self.time, dt, omega, torque);
+            }
         }
     }
 
@@ -263,7 +288,8 @@ impl Stand {
     }
 
     /// Runs the excitation (init phase not recorded, like the driver) and calls `sink` with each
-    /// recorded row.
+    /// recorded row (its stand columns filled when a drivetrain is simulated: thrust, bus
+    /// voltage and current, and the duty as `command`).
     pub fn run<E>(
         &mut self,
         excitation: &Excitation,
@@ -296,10 +322,11 @@ impl Stand {
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();
-            sink(Row {
-                ts_local: 1000.0 + t + delay,
-                sample,
-            })?;
+            let mut row = Row::new(1000.0 + t + delay, sample);
+            if let Some(d) = self.measure_drivetrain() {
+                row.stand = d.stand();
+            }
+            sink(row)?;
         }
         Ok(n)
     }

@@ -310,10 +310,7 @@ fn progress_reports_every_stage_in_order() {
     };
     let rows: Vec<propid_io::tsv::Row> = simulate(stand, &excitation, 9)
         .into_iter()
-        .map(|sample| propid_io::tsv::Row {
-            ts_local: f64::NAN,
-            sample,
-        })
+        .map(|sample| propid_io::tsv::Row::new(f64::NAN, sample))
         .collect();
     let seen = Mutex::new(Vec::new());
     let report = diagnose_rows_observed(rows, Options::default(), &|stage| {

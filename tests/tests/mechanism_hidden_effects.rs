@@ -30,15 +30,17 @@ enum Pattern {
 fn rows(records: &[Record]) -> Vec<Row> {
     records
         .iter()
-        .map(|r| Row {
-            ts_local: r.ts_local,
-            sample: Sample {
-                t: r.t,
-                force: r.force,
-                velocity: r.velocity,
-                acceleration: r.acceleration,
-                position: r.position,
-            },
+        .map(|r| {
+            Row::new(
+                r.ts_local,
+                Sample {
+                    t: r.t,
+                    force: r.force,
+                    velocity: r.velocity,
+                    acceleration: r.acceleration,
+                    position: r.position,
+                },
+            )
         })
         .collect()
 }

@@ -1813,14 +1813,14 @@ pub fn run(s: &Signals, options: Options, progress: Observer<'_>) -> Result<Repo
     let n = s.len();
     let base = Model::default();
     let unfit = || {
-        InputError(
+        InputError::invalid(
             "the base model cannot be fitted: the force or velocity does not vary enough to identify J and c2"
-                .into(),
+                .to_string(),
         )
     };
     let base_fit = fit_on_all(&base, s).ok_or_else(unfit)?;
     if base_fit.theta[0].is_nan() || base_fit.theta[0] <= 0.0 {
-        return Err(InputError(
+        return Err(InputError::invalid(
             "the fitted inertia is not positive: force and acceleration do not move together (check signs and units)".into(),
         ));
     }

@@ -56,7 +56,7 @@ pub type Observer<'a> = &'a (dyn Fn(Stage) + Sync);
 pub use report::{figure as report_figure, to_text};
 use signals::Signals;
 
-use propid_io::tsv::{Row, Sample, TsvError, TsvReader};
+use propid_io::tsv::{Row, Sample};
 use propid_io::InputError;
 
 /// Smallest relative reduction of the held-out acceleration error for an effect to be named.
@@ -527,7 +527,7 @@ fn diagnose_complete(
                     extent,
                     vec![CannotJudge::NoExcitation { condition_number }],
                 );
-                r.notes.push(dynamics.0);
+                r.notes.push(dynamics.to_string());
                 r
             }
         },
@@ -687,7 +687,7 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
         notes: vec![format!(
             "steady-state data: the dynamics cannot be fitted ({}); the drag law is diagnosed from {} torque samples instead, \
              and simulation_rms holds the torque residual [N·m] of the seed's law (F = c2·ω² + F₀) and of F = k·|ω|^p + F₀",
-            why.0, law.samples
+            why, law.samples
         )],
         steady_state: Some(law),
         steady_share: 1.0,
@@ -699,33 +699,14 @@ fn steady_report(s: &Signals, law: DragLaw, why: InputError) -> Report {
 }
 
 /// Reads every complete row of a TSV with its host time (see [`read_samples`]).
-pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), TsvError> {
-    let name = path.display().to_string();
-    let input: Box<dyn std::io::BufRead> = if path == std::path::Path::new("-") {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        let f = std::fs::File::open(path).map_err(|e| TsvError::Io {
-            source_name: name.clone(),
-            line: 0,
-            source: e,
-        })?;
-        Box::new(std::io::BufReader::new(f))
-    };
-    let mut reader = TsvReader::new(input, if name == "-" { "<stdin>".into() } else { name })?;
-    let (mut out, mut skipped) = (Vec::new(), 0);
-    while let Some(row) = reader.next_row()? {
-        if row.sample.is_finite() {
-            out.push(row);
-        } else {
-            skipped += 1;
-        }
-    }
-    Ok((out, skipped))
+pub fn read_rows(path: &std::path::Path) -> Result<(Vec<Row>, usize), InputError> {
+    let table = propid_io::tsv::read_rows(path, |row| row.sample.is_finite())?;
+    Ok((table.rows, table.skipped))
 }
 
 /// Reads every complete row of a TSV (rows with a non-finite t, force, velocity or acceleration
 /// are skipped and counted).
-pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), TsvError> {
+pub fn read_samples(path: &std::path::Path) -> Result<(Vec<Sample>, usize), InputError> {
     let (rows, skipped) = read_rows(path)?;
     Ok((rows.into_iter().map(|r| r.sample).collect(), skipped))
 }

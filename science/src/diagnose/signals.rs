@@ -98,13 +98,13 @@ impl Signals {
     pub fn new(samples: Vec<Sample>) -> Result<Signals, InputError> {
         const MIN_SAMPLES: usize = 200;
         if samples.len() < MIN_SAMPLES {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{} complete samples; a diagnosis needs at least {MIN_SAMPLES}",
                 samples.len()
             )));
         }
         if let Some(k) = samples.windows(2).position(|w| w[1].t < w[0].t) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "time goes backwards at sample {} (t = {} after {})",
                 k + 2,
                 samples[k + 1].t,
@@ -130,7 +130,9 @@ impl Signals {
             .filter(|d| *d > 0.0)
             .collect();
         if dts.is_empty() {
-            return Err(InputError("all samples have the same time".into()));
+            return Err(InputError::invalid(
+                "all samples have the same time".to_string(),
+            ));
         }
         let mid = dts.len() / 2;
         let rate = 1.0 / *dts.select_nth_unstable_by(mid, f64::total_cmp).1;
