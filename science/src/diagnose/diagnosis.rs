@@ -290,7 +290,7 @@ fn ambiguity(
     let (a, b) = (extended, &other_base);
     let agreed = (agree(a.inertia, a.inertia_stderr, b.inertia, b.inertia_stderr)
         && agree(a.c2, a.c2_stderr, b.c2, b.c2_stderr))
-    .then(|| Agreed {
+    .then_some(Agreed {
         inertia: 0.5 * (a.inertia + b.inertia),
         c2: 0.5 * (a.c2 + b.c2),
     });

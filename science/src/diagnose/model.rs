@@ -408,7 +408,7 @@ impl Model {
 /// model took out, θ₀²·σ_F²·(1 − gain) per sample, is put back into every score, so that only
 /// the transformation's phase is scored.
 pub(crate) fn impulse_gain(dt: f64, span: f64, apply: impl Fn(&[f64], &[f64]) -> Vec<f64>) -> f64 {
-    if !(dt > 0.0) || !(span > 0.0) {
+    if dt.is_nan() || dt <= 0.0 || span.is_nan() || span <= 0.0 {
         return 1.0;
     }
     // Long enough for the stage to decay to e⁻³⁰; bounded far above the sample.
