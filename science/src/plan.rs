@@ -18,6 +18,7 @@
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use serde::{Deserialize, Serialize};
 
+use crate::diagnose::{Design, EffectKind};
 use crate::excitation::{Excitation, Pattern};
 use crate::stand::{simulate, StandConfig};
 use crate::InputError;
@@ -148,8 +149,8 @@ impl Precision {
 /// Whether a pattern tells two candidate effects apart.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Separation {
-    /// The two effects (diagnose's names).
-    pub effects: (String, String),
+    /// The two effects.
+    pub effects: (EffectKind, EffectKind),
     /// |correlation| of their regressors under the pattern.
     pub correlation: f64,
     /// True when the pattern can tell them apart.
@@ -194,14 +195,14 @@ pub struct Plan {
     pub candidates: Vec<Candidate>,
 }
 
-/// The effect pairs that diagnose confuses on poor excitation, with the regressor each adds to
-/// the acceleration equation.
-fn effect_pairs() -> [(&'static str, &'static str); 4] {
+/// The effect pairs that diagnose confuses on poor excitation.
+fn effect_pairs() -> [(EffectKind, EffectKind); 4] {
+    use EffectKind::*;
     [
-        ("coulomb_friction", "torque_lag"),
-        ("coulomb_friction", "viscous_friction"),
-        ("coulomb_friction", "braking_torque"),
-        ("torque_lag", "acceleration_lag"),
+        (CoulombFriction, TorqueLag),
+        (CoulombFriction, ViscousFriction),
+        (CoulombFriction, BrakingTorque),
+        (TorqueLag, AccelerationLag),
     ]
 }
 
@@ -246,22 +247,11 @@ fn separations(f: &[f64], w: &[f64], dt: f64) -> Vec<Separation> {
             (acc[b] - acc[a]) / (dt * (b - a).max(1) as f64)
         })
         .collect();
-    let regressor = |name: &str| -> Vec<f64> {
-        match name {
-            "coulomb_friction" => w.iter().map(|v| v.signum()).collect(),
-            "viscous_friction" => w.to_vec(),
-            // A braking torque: −B·sgn ω while the rotor slows. On a pattern that slows half the
-            // time and never rests, it is half a Coulomb friction plus a term in sgn(a).
-            "braking_torque" => w
-                .iter()
-                .zip(&acc)
-                .map(|(v, a)| if a * v < 0.0 { v.signum() } else { 0.0 })
-                .collect(),
-            // A first-order torque lag L: felt = F − L·Ḟ.
-            "torque_lag" => df.clone(),
-            // An acceleration lag L: true = a + L·ȧ.
-            _ => jerk.clone(),
-        }
+    let design = Design {
+        force_rate: &df,
+        speed: w,
+        acceleration: &acc,
+        jerk: &jerk,
     };
     // Residualise on the base regressors (F, ω|ω|) by least squares.
     let base: [Vec<f64>; 2] = [f.to_vec(), w.iter().map(|v| v * v.abs()).collect()];
@@ -279,15 +269,16 @@ fn separations(f: &[f64], w: &[f64], dt: f64) -> Vec<Separation> {
     };
     effect_pairs()
         .iter()
-        .map(|(a, b)| {
-            let ra = residualise(regressor(a));
-            let rb = residualise(regressor(b));
+        .filter_map(|&(a, b)| {
+            // The regressor each adds to the acceleration equation (see its candidate).
+            let ra = residualise(a.design_column(&design)?);
+            let rb = residualise(b.design_column(&design)?);
             let correlation = pearson(&ra, &rb).abs();
-            Separation {
-                effects: (a.to_string(), b.to_string()),
+            Some(Separation {
+                effects: (a, b),
                 correlation,
                 separable: correlation < SEPARABLE_BELOW,
-            }
+            })
         })
         .collect()
 }
@@ -504,7 +495,7 @@ mod tests {
         .unwrap();
         let find = |s: &[Separation]| {
             s.iter()
-                .find(|x| x.effects == ("coulomb_friction".into(), "torque_lag".into()))
+                .find(|x| x.effects == (EffectKind::CoulombFriction, EffectKind::TorqueLag))
                 .unwrap()
                 .clone()
         };

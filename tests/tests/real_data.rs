@@ -4,7 +4,7 @@
 
 use propid_io::import::{import_autoquad, import_rcbench, Imported, RcbenchOptions};
 use propid_io::tsv::Sample;
-use propid_science::diagnose::{diagnose, Options, Report};
+use propid_science::diagnose::{diagnose, Condition, Decision, Options, Report};
 
 fn data(path: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -91,7 +91,9 @@ fn rcbench_drag_law_table() {
             law.exponent,
             law.exponent_stderr
         );
-        assert!(law.cv_gain_percent < 3.0 && !law.selected && r.effects.is_empty());
+        assert!(
+            law.cv_gain_percent < 3.0 && law.decision != Decision::Named && r.effects.is_empty()
+        );
         c2s.push(law.c2);
         zs.push((law.exponent - 2.0).abs() / law.exponent_stderr);
         // The rates: the torque's median sample interval, the rpm's median change interval.
@@ -143,84 +145,100 @@ fn rcbench_drag_law_table() {
 /// The electrical rpm's change rates across the six runs as docs/REAL_DATA.md prints them.
 const RPM_RATE: (f64, f64) = (41.0, 142.0);
 
+/// The ESC32 F40 log, as the selection over combinations reads it (docs/REAL_DATA.md §3). Before
+/// it (one effect at a time, a 3 % threshold on the acceleration equation, a veto from the
+/// simulation) diagnose named a 57.1 ms force-sensor lag and 6.09 mN·m of braking (simulated
+/// velocity 38.1 % better). Scored by both held-out errors fold by fold, a 3.57 mN·m constant
+/// torque explains the held-out simulation far better (76.9 % against 20.1 %) and the data cannot
+/// separate it from an 80 ms force-sensor lag; braking is no better than the constant, which is
+/// simpler. J depends on the choice (1.80·10⁻⁵ with the constant, 3.75·10⁻⁵ with the lag): the
+/// report says so, with the run that would separate them.
 #[test]
-fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
+fn esc32_f40_a_constant_torque_or_a_telemetry_lag() {
+    use propid_science::diagnose::{EffectKind, Verdict};
     let (imported, r) = autoquad("f40_steps_5-2", 1600.0);
     assert!(imported.assumptions.iter().any(|a| a.contains("Kt")));
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    assert!(names.contains(&"force_sensor_lag"), "{names:?}");
-    // docs/REAL_DATA.md §3: 57.1 ± 1.1 ms (continuous signals between samples; a held-input
-    // reading would add half the 10 ms row interval).
-    let (lag, stderr) = r
-        .effects
+    assert_eq!(r.verdict, Verdict::Ambiguous);
+    let names: Vec<EffectKind> = r.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(names, [EffectKind::CoulombFriction], "{names:?}");
+    printed("constant torque [mN·m]", r.effects[0].value * 1e3, 3.57, 2);
+    let lag = r
+        .ambiguities
         .iter()
-        .find(|e| e.name == "force_sensor_lag")
-        .map(|e| (e.value, e.stderr))
-        .unwrap();
-    assert!(
-        (lag - 0.0571).abs() < 3.0 * stderr + 1e-4,
-        "telemetry lag {lag} s ± {stderr}"
+        .find(|a| a.between[1] == EffectKind::ForceSensorLag)
+        .expect("ambiguous with a force-sensor lag");
+    printed("the lag [ms]", lag.values[1] * 1e3, 79.9, 1);
+    assert!(lag.agreed.is_none(), "{lag:?}");
+    printed(
+        "J with the constant [1e-5]",
+        r.extended.inertia * 1e5,
+        1.80,
+        2,
     );
-    let braking = r.effects.iter().find(|e| e.name == "braking_torque");
-    assert!(
-        braking.is_some_and(|b| (b.value - 6.09e-3).abs() < 3.0 * b.stderr + 1e-5),
-        "{:?}",
-        r.effects
+    printed(
+        "J with the lag [1e-5]",
+        lag.alternative.inertia * 1e5,
+        3.75,
+        2,
     );
-    assert!(
-        (r.simulation_rms.gain_percent - 38.1).abs() < 0.5,
-        "{:?}",
-        r.simulation_rms
+    printed(
+        "simulation gain [%]",
+        r.simulation_rms.gain_percent,
+        49.6,
+        1,
     );
-    // The inertia of a 7-inch propeller and an outrunner rotor: 1e-5 .. 1e-4 kg·m².
+    assert!(r
+        .ambiguities
+        .iter()
+        .any(|a| a.between == [EffectKind::CoulombFriction, EffectKind::ForceOffset]));
+    // The inertia of a 7-inch propeller and an outrunner rotor: 1e-5 .. 1e-4 kg·m², either way.
     assert!(
-        (1e-5..1e-4).contains(&r.extended.mass),
-        "J {}",
-        r.extended.mass
-    );
-    assert!(
-        r.simulation_rms.gain_percent > 10.0,
-        "{:?}",
-        r.simulation_rms
+        (1e-5..1e-4).contains(&r.extended.inertia)
+            && (1e-5..1e-4).contains(&lag.alternative.inertia),
+        "J {} or {}",
+        r.extended.inertia,
+        lag.alternative.inertia
     );
 }
 
-/// The ESC32 F60 log: after the first extension (the telemetry lag) the remaining held-out error
-/// is not explained by any candidate; diagnose says so and where it sits, with figures
-/// (docs/REAL_DATA.md): half of it in one tenth of the held-out time, t = 92.5–95.1 s (on the measured 9.997 ms row interval) (a down-step
-/// in which the rotor slows faster than the reported force explains).
+/// The ESC32 F60 log (docs/REAL_DATA.md §3). Before the selection over combinations diagnose
+/// named a 64.5 ms force-sensor lag alone (8.3 % better simulated velocity) and put half of the
+/// remaining held-out error in t = 92.5–95.1 s. Now: a 2.68 mN·m constant torque and a 24.1 ms
+/// force-sensor delay, both better on held-out folds, yet the model fitted on the first 70 %
+/// simulates the last 30 % worse than the seed's (−53 %): that stretch holds the log's one step
+/// to full duty and the drop from it, which no other stretch resembles; the remaining error sits
+/// in t = 94.1–97.0 s, the drop (6.2 times the rest's), unexplained.
 #[test]
 fn esc32_f60_remaining_error_is_localized() {
-    use propid_science::diagnose::Verdict;
+    use propid_science::diagnose::{EffectKind, Verdict};
     let (_, r) = autoquad("esc32v3_f60-1", 1750.0);
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    assert_eq!(names, ["force_sensor_lag"], "{names:?}");
-    let lag = r.effects[0].value;
-    assert!(
-        (lag - 0.0645).abs() < 3.0 * r.effects[0].stderr + 1e-4,
-        "lag {lag}"
+    let names: Vec<EffectKind> = r.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(
+        names,
+        [EffectKind::CoulombFriction, EffectKind::ForceSensorLag],
+        "{names:?}"
     );
-    assert!(
-        (r.simulation_rms.gain_percent - 8.3).abs() < 0.5,
-        "{:?}",
-        r.simulation_rms
+    printed("constant torque [mN·m]", r.effects[0].value * 1e3, 2.68, 2);
+    printed("delay [ms]", r.effects[1].value * 1e3, 24.1, 1);
+    printed(
+        "simulation gain [%]",
+        r.simulation_rms.gain_percent,
+        -53.0,
+        1,
     );
-    assert_eq!(r.verdict, Verdict::Unexplained);
+    assert_eq!(r.verdict, Verdict::Ambiguous);
     let c = r.concentration.as_ref().expect("the error is localized");
-    assert_eq!(c.condition, "time_window");
-    assert!(
-        (c.from_s - 92.5).abs() < 0.1 && (c.to_s - 95.1).abs() < 0.1,
-        "{c:?}"
-    );
-    assert!((c.error_percent - 50.1).abs() < 1.0, "{c:?}");
-    assert!((c.samples_percent - 10.0).abs() < 0.5, "{c:?}");
+    assert_eq!(c.condition, Condition::TimeWindow);
+    printed("window from [s]", c.from_s, 94.1, 1);
+    printed("window to [s]", c.to_s, 97.0, 1);
+    printed("error share [%]", c.error_percent, 17.5, 1);
+    printed("ratio", c.ratio, 6.2, 1);
 }
 
-/// docs/REAL_DATA.md §3, F60: what the localized error holds. The window covers the end of the
-/// log's one step at 100 % duty and the drop to 50 % that ends it: there the rotor slows at over
-/// 8,000 rad/s² while the reported force stays positive (braking Kt·I_bus/duty does not show).
-/// At full duty the force per ω² also reads 5 % low, but correcting it moves the held-out gain by
-/// under a point: that is not what the window holds.
+/// docs/REAL_DATA.md §3, F60: what the localized error holds. The window holds the end of the
+/// log's one step at 100 % duty and the drop to 50 %: there the rotor slows at over 8,000
+/// rad/s² while the reported force stays positive (braking Kt·I_bus/duty does not show). At full
+/// duty the force per ω² also reads 5 % low; corrected, the error still sits in the drop.
 #[test]
 fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     let (imported, r) = autoquad("esc32v3_f60-1", 1750.0);
@@ -262,11 +280,11 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     printed("c2 at 65-95 %, highest [1e-8]", hi * 1e8, 5.29, 2);
     // The window starts within the full-duty step and holds the drop that ends it.
     let c = r.concentration.as_ref().expect("the error is localized");
+    // The window (a thirtieth of the record, slid by half of one) holds the drop.
     assert!(
-        c.from_s > full.0 && c.from_s < full.1,
+        c.from_s <= full.1 && c.to_s > full.1 + 0.5,
         "{c:?} against {full:?}"
     );
-    assert!(c.to_s > full.1 + 0.5, "{c:?} against {full:?}");
     // The drop: within 0.15 s of the last full-duty sample the rotor slows at over 8,000 rad/s²
     // while every reported force is positive.
     let drop: Vec<&propid_io::tsv::Row> = imported
@@ -289,7 +307,8 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
             .all(|row| !row.sample.force.is_finite() || row.sample.force > 0.0),
         "the reported force stays positive"
     );
-    // The 5 % misreading at full duty, corrected, is not what the window holds.
+    // The 5 % misreading at full duty, corrected, is not what the window holds: the error
+    // still sits in the drop.
     let mut corrected = imported.rows.clone();
     for (row, &d) in corrected.iter_mut().zip(&duty) {
         if (d - 100.0).abs() < 1e-6 {
@@ -297,15 +316,6 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
         }
     }
     let fixed = diagnose(&samples(&corrected), Options::default()).unwrap();
-    printed(
-        "gain with the full-duty force corrected",
-        fixed.simulation_rms.gain_percent,
-        9.0,
-        0,
-    );
     let c = fixed.concentration.as_ref().expect("still localized");
-    assert!(
-        (c.from_s - 92.5).abs() < 0.1 && (c.to_s - 95.1).abs() < 0.1,
-        "{c:?}"
-    );
+    assert!(c.from_s <= full.1 && c.to_s > full.1 + 0.5, "{c:?}");
 }

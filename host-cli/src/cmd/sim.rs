@@ -279,6 +279,7 @@ impl StandArgs {
             noise_velocity: self.noise_velocity,
             noise_acceleration: self.noise_acceleration,
             jitter: self.jitter,
+            ..StandConfig::default()
         }
     }
 }
