@@ -408,10 +408,7 @@ impl Model {
 /// model took out, θ₀²·σ_F²·(1 − gain) per sample, is put back into every score, so that only
 /// the transformation's phase is scored.
 pub(crate) fn impulse_gain(dt: f64, span: f64, apply: impl Fn(&[f64], &[f64]) -> Vec<f64>) -> f64 {
-    // NaN included: not a positive step or span.
-    if dt.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-        || span.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
-    {
+    if dt.is_nan() || dt <= 0.0 || span.is_nan() || span <= 0.0 {
         return 1.0;
     }
     // Long enough for the stage to decay to e⁻³⁰; bounded far above the sample.

@@ -128,6 +128,37 @@ pub(crate) fn judged(
     (v, e.candidate().admissible(&e, v, &fitted))
 }
 
+/// The first effect of `model` other than `except` whose value in the joint fit `fit` is one its
+/// mechanism cannot have (a sign, a range, not finite), whether or not it is resolved: a model is
+/// physical only when every effect in it is. Cheap: no profiling (the sign does not need the
+/// nonlinear parameter's standard error).
+pub(crate) fn spoiled(model: &Model, except: usize, fit: &Fit) -> Option<EffectKind> {
+    let no_profile = || f64::NAN;
+    (0..model.effects.len())
+        .filter(|&i| i != except)
+        .find_map(|i| {
+            let e = model.effects[i];
+            let fitted = Fitted {
+                theta: &fit.theta,
+                stderr: &fit.stderr,
+                column: model.column_of(i),
+                rms: (fit.rss / fit.n.max(1.0)).sqrt(),
+                profile: &no_profile,
+            };
+            let v = e.candidate().estimate(&e, &fitted);
+            // Its sign and range alone: as if resolved.
+            let sure = Estimate { stderr: 0.0, ..v };
+            match e.candidate().admissible(&e, sure, &fitted) {
+                Err(
+                    Inadmissible::WrongSign
+                    | Inadmissible::NotFinite
+                    | Inadmissible::OutOfRange { .. },
+                ) => Some(e.kind),
+                _ => None,
+            }
+        })
+}
+
 /// The value of effect `index` of `model` from `fit`.
 pub(crate) fn estimate_of(model: &Model, index: usize, fit: &Fit, s: &Signals) -> Estimate {
     judged(model, index, fit, s).0
@@ -176,7 +207,10 @@ fn try_effect(
     let evaluate = |model: Model| -> Result<Trial, Rejection> {
         let effect = model.effects[last];
         let fit = fit_on_all(&model, s).ok_or(Rejection::NotFitted)?;
-        let (estimate, admissible) = judged(&model, last, &fit, s);
+        let (estimate, mut admissible) = judged(&model, last, &fit, s);
+        if let (Ok(()), Some(effect)) = (admissible, spoiled(&model, last, &fit)) {
+            admissible = Err(Inadmissible::Spoils { effect });
+        }
         let scored = Scored::of(model, s, plan).ok_or(Rejection::NotFitted)?;
         let evidence = Evidence {
             effect: kind,
@@ -713,7 +747,8 @@ fn try_pair(
     let both = retune(with_a.with(b)?, s, None);
     let n = both.effects.len();
     let fit = fit_on_all(&both, s)?;
-    let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok());
+    let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())
+        && spoiled(&both, n - 1, &fit).is_none();
     let scored = Scored::of(both, s, plan)?;
     let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
     let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;

@@ -307,8 +307,7 @@ pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
         return Some(Decision::rejected(Rejection::Inadmissible { why }));
     }
     let gain = Gain::of(parent, &e.errors);
-    // NaN included: no positive gain.
-    if gain.mean.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+    if gain.mean.is_nan() || gain.mean <= 0.0 {
         return Some(Decision::rejected(Rejection::NoGain));
     }
     if !gain.significant() {

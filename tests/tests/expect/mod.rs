@@ -186,8 +186,8 @@ fn judge_reading(m: &Reading, expected: &[Expected], truth: Option<Truth>) -> Ve
         match m.effects.iter().find(|(k, _)| *k == e.kind) {
             None => bad.push(format!("{} not found", e.kind)),
             Some(&(_, v)) => {
-                let within = ((v - e.value) / e.value).abs() <= e.tolerance; // false for NaN
-                if !within {
+                let error = ((v - e.value) / e.value).abs();
+                if error.is_nan() || error > e.tolerance {
                     bad.push(format!(
                         "{} = {v:.4e}, truth {:.4e} within {:.0} %",
                         e.kind,

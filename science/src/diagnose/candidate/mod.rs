@@ -86,6 +86,14 @@ pub enum Inadmissible {
         /// The parameter's value.
         value: f64,
     },
+    /// Fitted jointly with it, another effect of the model takes a value that effect cannot
+    /// have (a negative friction, a negative lag): the two trade one column against the other
+    /// (on a square wave a Coulomb friction and a braking torque are one signal), and a model is
+    /// physical only when every one of its effects is.
+    Spoils {
+        /// The effect whose value turns impossible.
+        effect: EffectKind,
+    },
 }
 
 impl std::fmt::Display for Inadmissible {
@@ -107,6 +115,10 @@ impl std::fmt::Display for Inadmissible {
             Inadmissible::OnBound { value } => write!(
                 f,
                 "a parameter sits on the bound of its search ({value:.3}): the data do not place it"
+            ),
+            Inadmissible::Spoils { effect } => write!(
+                f,
+                "fitted with it, {effect} takes a value that mechanism cannot have: the two trade one signal between them"
             ),
         }
     }
