@@ -68,7 +68,7 @@ fn rcbench_drag_law_table() {
     };
     assert_eq!(span(&ps), (1.956, 2.072));
     assert_eq!(span(&ses), (0.020, 0.028));
-    let mut c2s = Vec::new();
+    let (mut c2s, mut sigmas) = (Vec::new(), Vec::new());
     let (mut torque_dt, mut rpm_rate) = (Vec::new(), Vec::new());
     for (run, n, p, se, gain, c2) in table {
         let (imported, r) = rcbench(run);
@@ -93,6 +93,7 @@ fn rcbench_drag_law_table() {
         );
         assert!(law.cv_gain_percent < 3.0 && !law.selected && r.effects.is_empty());
         c2s.push(law.c2);
+        sigmas.push((law.exponent - 2.0).abs() / law.exponent_stderr);
         // The rates: the torque's median sample interval, the rpm's median change interval.
         let q: Vec<f64> = imported
             .rows
@@ -126,6 +127,12 @@ fn rcbench_drag_law_table() {
         .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)));
     printed("torque interval min [ms]", tlo * 1e3, 150.0, 0);
     printed("torque interval max [ms]", thi * 1e3, 163.0, 0);
+    printed("torque rate min [Hz]", 1.0 / thi, 6.1, 1);
+    printed("torque rate max [Hz]", 1.0 / tlo, 6.7, 1);
+    // "The exponent is 2 within three standard errors in every run (0.3 to 2.7 of them)".
+    let (slo, shi) = span(&sigmas);
+    printed("closest to 2 [s.e.]", slo, 0.3, 1);
+    printed("farthest from 2 [s.e.]", shi, 2.7, 1);
     let (rlo, rhi) = rpm_rate
         .iter()
         .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)));
@@ -137,82 +144,123 @@ fn rcbench_drag_law_table() {
 /// The electrical rpm's change rates across the six runs as docs/REAL_DATA.md prints them.
 const RPM_RATE: (f64, f64) = (41.0, 142.0);
 
-#[test]
-fn esc_telemetry_shows_its_lag_and_the_motor_friction() {
-    let (imported, r) = autoquad("f40_steps_5-2", 1600.0);
+/// What docs/REAL_DATA.md §2 prints about diagnose on one ESC32 log.
+struct Diagnosed {
+    /// The base model's J [1e-5 kg·m²] and c2 [1e-8 N·m·s²/rad²].
+    base: (f64, f64),
+    /// The named effects: name, value and standard error in the unit printed (ms, mN·m).
+    named: &'static [(&'static str, f64, f64)],
+    /// Held-out simulated-velocity RMS, base → extended [rad/s], and the gain [%].
+    simulation: (f64, f64, f64),
+    /// The extended model's J [1e-5] and c2 [1e-8].
+    extended: (f64, f64),
+    /// How far the extended c2 reads below the load cell's on the same motor and ESC [%].
+    c2_below_load_cell: f64,
+}
+
+/// docs/REAL_DATA.md §2: diagnose on an ESC32 log, every figure as printed. `load_cell` is the
+/// RCbenchmark log of the same motor and ESC.
+fn check_diagnosed(name: &str, kv: f64, load_cell: &str, p: Diagnosed) -> Report {
+    let (imported, r) = autoquad(name, kv);
     assert!(imported.assumptions.iter().any(|a| a.contains("Kt")));
+    printed(&format!("{name}: base J"), r.base.mass * 1e5, p.base.0, 2);
+    printed(&format!("{name}: base c2"), r.base.c2 * 1e8, p.base.1, 2);
     let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    assert!(names.contains(&"force_sensor_lag"), "{names:?}");
-    // docs/REAL_DATA.md §3: 57.1 ± 1.1 ms (continuous signals between samples; a held-input
-    // reading would add half the 10 ms row interval).
-    let (lag, stderr) = r
-        .effects
-        .iter()
-        .find(|e| e.name == "force_sensor_lag")
-        .map(|e| (e.value, e.stderr))
-        .unwrap();
-    assert!(
-        (lag - 0.0571).abs() < 3.0 * stderr + 1e-4,
-        "telemetry lag {lag} s ± {stderr}"
+    let expected: Vec<&str> = p.named.iter().map(|n| n.0).collect();
+    assert_eq!(names, expected, "{name}");
+    for (&(what, value, stderr), e) in p.named.iter().zip(&r.effects) {
+        let (scale, decimals) = match what {
+            "force_sensor_lag" => (1e3, 1),
+            _ => (1e3, 2),
+        };
+        printed(&format!("{name}: {what}"), e.value * scale, value, decimals);
+        printed(
+            &format!("{name}: {what} s.e."),
+            e.stderr * scale,
+            stderr,
+            decimals,
+        );
+    }
+    let s = &r.simulation_rms;
+    printed(&format!("{name}: base RMS"), s.base, p.simulation.0, 1);
+    printed(
+        &format!("{name}: extended RMS"),
+        s.extended,
+        p.simulation.1,
+        1,
     );
-    let braking = r.effects.iter().find(|e| e.name == "braking_torque");
-    assert!(
-        braking.is_some_and(|b| (b.value - 6.09e-3).abs() < 3.0 * b.stderr + 1e-5),
-        "{:?}",
-        r.effects
+    printed(&format!("{name}: gain"), s.gain_percent, p.simulation.2, 1);
+    printed(
+        &format!("{name}: extended J"),
+        r.extended.mass * 1e5,
+        p.extended.0,
+        2,
     );
-    assert!(
-        (r.simulation_rms.gain_percent - 38.1).abs() < 0.5,
-        "{:?}",
-        r.simulation_rms
+    printed(
+        &format!("{name}: extended c2"),
+        r.extended.c2 * 1e8,
+        p.extended.1,
+        2,
     );
-    // The inertia of a 7-inch propeller and an outrunner rotor: 1e-5 .. 1e-4 kg·m².
-    assert!(
-        (1e-5..1e-4).contains(&r.extended.mass),
-        "J {}",
-        r.extended.mass
+    let (_, cell) = rcbench(load_cell);
+    let law = cell.steady_state.as_ref().expect("steady-state drag law");
+    printed(
+        &format!("{name}: c2 below the load cell's"),
+        100.0 * (1.0 - r.extended.c2 / law.c2),
+        p.c2_below_load_cell,
+        1,
     );
-    assert!(
-        r.simulation_rms.gain_percent > 10.0,
-        "{:?}",
-        r.simulation_rms
+    r
+}
+
+#[test]
+fn esc32_f40_diagnosed() {
+    check_diagnosed(
+        "f40_steps_5-2",
+        1600.0,
+        "2019-11-05_171350",
+        Diagnosed {
+            base: (2.92, 5.55),
+            named: &[
+                ("force_sensor_lag", 57.1, 1.1),
+                ("braking_torque", 6.09, 0.17),
+            ],
+            simulation: (58.5, 36.2, 38.1),
+            extended: (2.84, 5.39),
+            c2_below_load_cell: 9.8,
+        },
     );
 }
 
 /// The ESC32 F60 log: after the first extension (the telemetry lag) the remaining held-out error
-/// is not explained by any candidate; diagnose says so and where it sits, with figures
-/// (docs/REAL_DATA.md): half of it in one tenth of the held-out time, t = 92.5–95.1 s (on the measured 9.997 ms row interval) (a down-step
-/// in which the rotor slows faster than the reported force explains).
+/// is not explained by any candidate; diagnose says so and where it sits (docs/REAL_DATA.md §2).
 #[test]
-fn esc32_f60_remaining_error_is_localized() {
+fn esc32_f60_diagnosed_and_the_rest_localized() {
     use propid_science::diagnose::Verdict;
-    let (_, r) = autoquad("esc32v3_f60-1", 1750.0);
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    assert_eq!(names, ["force_sensor_lag"], "{names:?}");
-    let lag = r.effects[0].value;
-    assert!(
-        (lag - 0.0645).abs() < 3.0 * r.effects[0].stderr + 1e-4,
-        "lag {lag}"
-    );
-    assert!(
-        (r.simulation_rms.gain_percent - 8.3).abs() < 0.5,
-        "{:?}",
-        r.simulation_rms
+    let r = check_diagnosed(
+        "esc32v3_f60-1",
+        1750.0,
+        "2019-11-07_184325",
+        Diagnosed {
+            base: (3.51, 5.28),
+            named: &[("force_sensor_lag", 64.5, 1.5)],
+            simulation: (59.3, 54.4, 8.3),
+            extended: (4.01, 5.28),
+            c2_below_load_cell: 10.6,
+        },
     );
     assert_eq!(r.verdict, Verdict::Unexplained);
     let c = r.concentration.as_ref().expect("the error is localized");
     assert_eq!(c.condition, "time_window");
-    assert!(
-        (c.from_s - 92.5).abs() < 0.1 && (c.to_s - 95.1).abs() < 0.1,
-        "{c:?}"
-    );
-    assert!((c.error_percent - 50.1).abs() < 1.0, "{c:?}");
-    assert!((c.samples_percent - 10.0).abs() < 0.5, "{c:?}");
+    printed("window from", c.from_s, 92.5, 1);
+    printed("window to", c.to_s, 95.1, 1);
+    printed("share of the error", c.error_percent, 50.0, 0);
+    printed("share of the samples", c.samples_percent, 10.0, 0);
 }
 
-/// docs/REAL_DATA.md §3, F60: what the localized error holds. The window covers the end of the
+/// docs/REAL_DATA.md §4, F60: what the localized error holds. The window covers the end of the
 /// log's one step at 100 % duty and the drop to 50 % that ends it: there the rotor slows at over
-/// 8,000 rad/s² while the reported force stays positive (braking Kt·I_bus/duty does not show).
+/// 8,000 rad/s² while the reported force stays positive (the braking the lagged current shows late).
 /// At full duty the force per ω² also reads 5 % low, but correcting it moves the held-out gain by
 /// under a point: that is not what the window holds.
 #[test]
@@ -252,6 +300,12 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     });
     printed("c2 at 65-95 %, lowest [1e-8]", lo * 1e8, 5.24, 2);
     printed("c2 at 65-95 %, highest [1e-8]", hi * 1e8, 5.29, 2);
+    printed(
+        "full duty below the 95 % step [%]",
+        100.0 * (1.0 - full.3 / below[6].3),
+        5.0,
+        0,
+    );
     // The window starts within the full-duty step and holds the drop that ends it.
     let c = r.concentration.as_ref().expect("the error is localized");
     assert!(
@@ -292,8 +346,8 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     printed(
         "gain with the full-duty force corrected",
         fixed.simulation_rms.gain_percent,
-        9.0,
-        0,
+        9.1,
+        1,
     );
     let c = fixed.concentration.as_ref().expect("still localized");
     assert!(
@@ -543,6 +597,9 @@ struct LagModels {
     /// The current lag and a braking torque ∝ max(0, k·ω − duty): regeneration the current
     /// would not show (gain over the current-lag model).
     braking_on_top: Evidence,
+    /// The current-lag model fitted to every row: J [kg·m²], c2 [N·m·s²/rad²] and the constant
+    /// torque [N·m].
+    current_lag_fit: [f64; 3],
     /// No current at all: a torque driven by the duty against the back-EMF (k₁·duty − k₂·ω).
     duty_driven: Evidence,
 }
@@ -574,7 +631,13 @@ fn lag_models(e: &Esc32) -> LagModels {
     let duty_lag = tuned(rows, &y, seed, (0.001, 0.1, 0.001), |tau, i| {
         [e.g[i] / lowpass(&e.t, &e.duty, tau, i), w2(i), -1.0]
     });
+    let mut all = NormalEquations::new();
+    for &i in rows {
+        all.update(&[current(current_lag.value, i), w2(i), -1.0], y(i));
+    }
+    let theta = all.solve().unwrap().theta;
     LagModels {
+        current_lag_fit: [1.0 / theta[0], theta[1] / theta[0], theta[2] / theta[0]],
         duty_lag,
         constant: fixed(held_out(rows, y, |i| [e.force[i], w2(i), -1.0])),
         force_lag: tuned(rows, &y, seed, (0.0, 0.1, 0.0005), |l, i| {
@@ -636,6 +699,8 @@ struct Mechanisms {
     drop_amps: (f64, f64),
     /// Its lowest value at the drop from 100 % to 50 % with the lag undone [A].
     drop_amps_rebuilt: f64,
+    /// The current-lag model's J [1e-5 kg·m²], c2 [1e-8 N·m·s²/rad²], constant torque [mN·m].
+    fit: (f64, f64, f64),
     /// The voltage's lag behind the current [ms] and what modelling it gains [%].
     volts_lag_ms: f64,
     volts_lag_gain: f64,
@@ -732,6 +797,24 @@ fn check_mechanisms(p: Mechanisms) {
     assert_eq!(
         m.braking_on_top.folds_won, p.braking_folds,
         "{name}: braking folds"
+    );
+    printed(
+        &format!("{name}: J [1e-5]"),
+        m.current_lag_fit[0] * 1e5,
+        p.fit.0,
+        2,
+    );
+    printed(
+        &format!("{name}: c2 [1e-8]"),
+        m.current_lag_fit[1] * 1e8,
+        p.fit.1,
+        2,
+    );
+    printed(
+        &format!("{name}: constant [mN·m]"),
+        m.current_lag_fit[2] * 1e3,
+        p.fit.2,
+        1,
     );
     // The current lag explains more than every other structure tried.
     for other in [&m.force_lag, &m.current_delay, &m.duty_lag, &m.duty_driven] {
@@ -831,6 +914,7 @@ fn esc32_f40_lag_sits_on_the_bus_current() {
         up_steps: 18,
         drop_amps: (2.8, -0.34),
         drop_amps_rebuilt: -8.9,
+        fit: (2.10, 5.35, 3.6),
         volts_lag_ms: -5.4,
         volts_lag_gain: 0.3,
     });
@@ -858,6 +942,7 @@ fn esc32_f60_lag_sits_on_the_bus_current() {
         up_steps: 16,
         drop_amps: (4.1, -0.29),
         drop_amps_rebuilt: -6.0,
+        fit: (2.17, 5.13, 2.6),
         volts_lag_ms: -4.2,
         volts_lag_gain: 0.2,
     });
@@ -871,6 +956,17 @@ fn esc32_f60_lag_sits_on_the_bus_current() {
 /// step of the duty completed within one 10 ms row.
 #[test]
 fn esc32_logs_are_not_the_open_firmware_and_the_duty_steps_at_once() {
+    // The open firmware's current filter: one update per ADC buffer of 8 conversions of
+    // 7.5 + 12.5 cycles at 12 MHz, each moving 1/64 of the way (adc.h, adc.c line 267); its duty
+    // ramp: 1 % of the PWM period per 0.5 ms tick, so 2.5 ms per 5 % step (run.c line 488).
+    let buffer = 8.0 * (7.5 + 12.5) / 12e6;
+    printed(
+        "open firmware filter [ms]",
+        -buffer / (1.0 - 1.0 / 64.0f64).ln() * 1e3,
+        0.85,
+        2,
+    );
+    printed("open firmware ramp per 5 % [ms]", 5.0 * 0.5, 2.5, 1);
     for (name, startup_rows, up_steps) in [("f40_steps_5-2", 1, 18), ("esc32v3_f60-1", 2, 17)] {
         let [window, a, b, c, composite, period, rpm, duty]: [Vec<f64>; 8] = csv_columns(
             &data(&format!("autoquad/{name}.csv")),
