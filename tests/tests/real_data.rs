@@ -699,6 +699,9 @@ struct Mechanisms {
     drop_amps: (f64, f64),
     /// Its lowest value at the drop from 100 % to 50 % with the lag undone [A].
     drop_amps_rebuilt: f64,
+    /// The current lag on the rows before the first drop of the duty (up-steps only): lag [ms]
+    /// and gain [%].
+    up_steps_only: (f64, f64),
     /// The current-lag model's J [1e-5 kg·m²], c2 [1e-8 N·m·s²/rad²], constant torque [mN·m].
     fit: (f64, f64, f64),
     /// The voltage's lag behind the current [ms] and what modelling it gains [%].
@@ -816,6 +819,32 @@ fn check_mechanisms(p: Mechanisms) {
         p.fit.2,
         1,
     );
+    // The up-steps alone prefer about the same lag (their transients are small: little gain).
+    let first_drop = (1..e.t.len())
+        .find(|&i| e.duty[i] < e.duty[i - 1] - 0.1)
+        .unwrap();
+    let early: Vec<usize> = e.rows.iter().copied().filter(|&i| i < first_drop).collect();
+    let y = |i: usize| e.a[i];
+    let seed = held_out(&early, y, |i| [e.force[i], -e.w[i] * e.w[i]]);
+    let up = tuned(&early, &y, seed, (0.0, 0.1, 0.0005), |tau, i| {
+        [
+            (e.g[i] + tau * e.g_rate[i]) / e.duty[i],
+            -e.w[i] * e.w[i],
+            -1.0,
+        ]
+    });
+    printed(
+        &format!("{name}: up-steps only, lag"),
+        ms(up.value),
+        p.up_steps_only.0,
+        1,
+    );
+    printed(
+        &format!("{name}: up-steps only, gain"),
+        up.gain_percent,
+        p.up_steps_only.1,
+        1,
+    );
     // The current lag explains more than every other structure tried.
     for other in [&m.force_lag, &m.current_delay, &m.duty_lag, &m.duty_driven] {
         assert!(other.gain_percent < m.current_lag.gain_percent);
@@ -914,6 +943,7 @@ fn esc32_f40_lag_sits_on_the_bus_current() {
         up_steps: 18,
         drop_amps: (2.8, -0.34),
         drop_amps_rebuilt: -8.9,
+        up_steps_only: (28.5, 6.7),
         fit: (2.10, 5.35, 3.6),
         volts_lag_ms: -5.4,
         volts_lag_gain: 0.3,
@@ -942,6 +972,7 @@ fn esc32_f60_lag_sits_on_the_bus_current() {
         up_steps: 16,
         drop_amps: (4.1, -0.29),
         drop_amps_rebuilt: -6.0,
+        up_steps_only: (21.8, 6.3),
         fit: (2.17, 5.13, 2.6),
         volts_lag_ms: -4.2,
         volts_lag_gain: 0.2,
