@@ -982,11 +982,10 @@ fn esc32_f60_lag_sits_on_the_bus_current() {
 /// docs/REAL_DATA.md §2: the open ESC32 firmware (v2, bn999/esc32) reports its ADC window
 /// (`histSize`, at least 2), its phase averages (ADC sums, non-zero while the motor turns) and
 /// its commutation period in µs; these logs carry 0 for the first two in every row and a small
-/// count for the third, so their firmware is not that code and its 0.85 ms current filter does
-/// not describe them. Every logged duty after the start-up rows sits on a 5 % level, so every
+/// count for the third, so they do not show that code's values, nor its 0.85 ms current filter. Every logged duty after the start-up rows sits on a 5 % level, so every
 /// step of the duty completed within one 10 ms row.
 #[test]
-fn esc32_logs_are_not_the_open_firmware_and_the_duty_steps_at_once() {
+fn esc32_logs_do_not_carry_the_open_firmwares_values_and_the_duty_steps_at_once() {
     // The open firmware's current filter: one update per ADC buffer of 8 conversions of
     // 7.5 + 12.5 cycles at 12 MHz, each moving 1/64 of the way (adc.h, adc.c line 267); its duty
     // ramp: 1 % of the PWM period per 0.5 ms tick, so 2.5 ms per 5 % step (run.c line 488).
