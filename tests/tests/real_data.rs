@@ -982,8 +982,9 @@ fn esc32_f60_lag_sits_on_the_bus_current() {
 /// docs/REAL_DATA.md §2: the open ESC32 firmware (v2, bn999/esc32) reports its ADC window
 /// (`histSize`, at least 2), its phase averages (ADC sums, non-zero while the motor turns) and
 /// its commutation period in µs; these logs carry 0 for the first two in every row and a small
-/// count for the third, so they do not show that code's values, nor its 0.85 ms current filter. Every logged duty after the start-up rows sits on a 5 % level, so every
-/// step of the duty completed within one 10 ms row.
+/// count for the third, so they do not show that code's values, nor its 0.85 ms current filter.
+/// Every logged duty after the start-up rows sits on a 5 % level, so every step of the duty
+/// completed within one 10 ms row.
 #[test]
 fn esc32_logs_do_not_carry_the_open_firmwares_values_and_the_duty_steps_at_once() {
     // The open firmware's current filter: one update per ADC buffer of 8 conversions of
