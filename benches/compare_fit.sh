@@ -44,6 +44,7 @@ if [ "$(stat -c %s "$dir/mib.tsv")" -lt $(((mib << 20) * 9 / 10)) ]; then
 fi
 
 . benches/common.sh
+. ci/lib.sh
 export LC_ALL=C
 # Children's user + sys CPU time [s] in the output of bash's `times` (which must run in the shell
 # that waited for them, not in a command substitution).
@@ -62,7 +63,7 @@ time_runs() {
     # The clock is read in this shell (a command substitution would fork a subshell inside
     # the timed interval): microseconds, with the decimal point taken out.
     t0=${EPOCHREALTIME/./}
-    "$@" >/dev/null 2>&1
+    "$@" >/dev/null 2>&1 || { echo "failed: $*" >&2; exit 1; }
     t1=${EPOCHREALTIME/./}
     echo $((10#$t1 - 10#$t0)) >> "$log"
   done
@@ -73,10 +74,22 @@ time_runs() {
   wall=$(median < "$log" | awk '{ printf "%.6f", $1 / 1e6 }')
   cpu=$(awk -v a="$cpu0" -v b="$cpu1" -v n="$n" 'BEGIN { printf "%.6f", (b - a) / n }')
   rss=0
-  [ "$1" != sh ] && rss=$(/usr/bin/time -f "%M" "$@" 2>&1 >/dev/null | tail -1)
+  if [ "$1" != sh ]; then
+    /usr/bin/time -o "$dir/rss" -f "%M" "$@" >/dev/null 2>&1 || { echo "failed: $*" >&2; exit 1; }
+    rss=$(tail -1 "$dir/rss")
+  fi
+  [ "$(grep -c . "$log")" -eq "$n" ] || { echo "timed $(grep -c . "$log") of $n runs: $*" >&2; exit 1; }
   echo "$wall $cpu $rss"
 }
 
+# Before any timing: each program answers on the small file (a seed or a build that prints
+# nothing, or fails, is not timed).
+for prog in "$P" ${BEFORE:+"$BEFORE"}; do
+  "$prog" fit "$dir/small.tsv" > "$dir/answer"
+  grep -q '^mass: ' "$dir/answer" || { echo "$prog fit gave no fit" >&2; exit 1; }
+done
+python3 tests/seed/dynamics_id_regressor.py --no-plot < "$dir/small.tsv" > "$dir/answer" 2>/dev/null
+grep -q '^mass:' "$dir/answer" || { echo "the seed regressor gave no fit" >&2; exit 1; }
 echo "machine: $(nproc) cores, $(uname -sm), load average $(cut -d' ' -f1-3 /proc/loadavg)"
 small_runs=${SMALL_RUNS:-50}
 [ "${SMOKE:-0}" = 1 ] && small_runs=3
@@ -97,6 +110,7 @@ for f in "${files[@]}"; do
       seed) n=$n_seed; r=$(time_runs "$n" sh -c "exec python3 tests/seed/dynamics_id_regressor.py --no-plot < '$dir/$f.tsv'") ;;
     esac
     read -r w c m <<< "$r"
+    [ -n "$w" ] || { echo "no timing for $prog on $f" >&2; exit 1; }
     wall[$f.$prog]=$w cpu[$f.$prog]=$c
     printf '%-6s %10d %-14s %5d %12.6f %12.6f %10d\n' "$f" "$rows" "$prog" "$n" "$w" "$c" "$m"
   done
@@ -108,12 +122,14 @@ for f in "${files[@]}"; do
 done
 [ "${ONLY_SMALL:-0}" = 1 ] && exit 0
 bytes=$(stat -c %s "$dir/mib.tsv")
-read -r w c m <<< "$(time_runs "$runs" "$P" fit "$dir/mib.tsv")"
+r=$(time_runs "$runs" "$P" fit "$dir/mib.tsv")
+read -r w c m <<< "$r"
 rate() { awk -v b="$1" -v t="$2" 'BEGIN { if (t > 0) printf "%.0f", b / t / 1e6; else printf "n/a" }'; }
 printf 'throughput on %d MiB: %s MB/s wall (%.3f s), %s MB/s per CPU second (%.3f s), peak RSS %d KiB\n' \
   "$mib" "$(rate "$bytes" "$w")" "$w" "$(rate "$bytes" "$c")" "$c" "$m"
 if [ -n "${BEFORE:-}" ]; then
-  read -r w c m <<< "$(time_runs "$runs" "$BEFORE" fit "$dir/mib.tsv")"
+  r=$(time_runs "$runs" "$BEFORE" fit "$dir/mib.tsv")
+  read -r w c m <<< "$r"
   printf 'before, same file:  %s MB/s wall (%.3f s), %s MB/s per CPU second (%.3f s), peak RSS %d KiB\n' \
     "$(rate "$bytes" "$w")" "$w" "$(rate "$bytes" "$c")" "$c" "$m"
 fi

@@ -19,10 +19,12 @@ rows=2000000
 if [ "${SMOKE:-0}" = 1 ]; then rows=20000; runs=1; fi
 $P sim --rate 500 --duration $((rows / 500)) --torque-lag 0.008 --seed 7 -o "$dir/long.tsv" 2>/dev/null
 . benches/common.sh
+. ci/lib.sh
 measure() {
   local bin=$1 walls=() cpus=() rss=0
   for _ in $(seq "$runs"); do
-    /usr/bin/time -f '%e %U %S %M' -o "$dir/t" "$bin" diagnose "$dir/long.tsv" > "$dir/out" 2>/dev/null
+    /usr/bin/time -f '%e %U %S %M' -o "$dir/t" "$bin" diagnose "$dir/long.tsv" > "$dir/out" 2>/dev/null ||
+      { echo "failed: $bin diagnose" >&2; exit 1; }
     read -r wall user sys kib < "$dir/t"
     walls+=("$wall"); cpus+=("$(echo "$user + $sys" | bc)")
     [ "$kib" -gt "$rss" ] && rss=$kib
@@ -32,6 +34,12 @@ measure() {
 }
 echo "diagnose on $rows rows ($(stat -c %s "$dir/long.tsv") bytes), median of $runs runs"
 printf 'program\twall s\tCPU s\tpeak RSS MiB\treport lines\n'
-printf 'propid diagnose\t%s\n' "$(measure "$P")"
-if [ -n "${BEFORE:-}" ]; then printf 'before\t%s\n' "$(measure "$BEFORE")"; fi
+# Each measured into a variable first: a failure inside $(…) given to printf would not stop
+# the script.
+now=$(measure "$P")
+printf 'propid diagnose\t%s\n' "$now"
+if [ -n "${BEFORE:-}" ]; then
+  before=$(measure "$BEFORE")
+  printf 'before\t%s\n' "$before"
+fi
 grep -q "torque_lag .*← named" "$dir/out" || { echo "the hidden torque lag was not named" >&2; exit 1; }

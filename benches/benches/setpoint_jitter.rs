@@ -9,8 +9,11 @@
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
-use propid_drive::drive::{run_drive, DriveConfig};
-use propid_drive::realtime::SystemClock;
+use propid_drive_host::drive::run_drive;
+use propid_drive_host::live::{DriveView, LiveState};
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::stand::Played;
+use propid_drive_proto::drive::DriveConfig;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_transport::{CanTransport, Frame, MemoryBus, TransportError};
 
@@ -82,10 +85,11 @@ fn run_loop(seconds: f64, live: bool) -> Vec<f64> {
         init_duration: seconds,
         pattern: Pattern::Sine,
     };
-    let cfg = DriveConfig::example(excitation);
+    let played = Played::try_from(excitation).unwrap();
+    let cfg = DriveConfig::example(played);
     let stop = Arc::new(AtomicBool::new(false));
     let mut page = live.then(|| {
-        let state = Arc::new(propid::live::LiveState::default());
+        let state = Arc::new(LiveState::default());
         let server = propid::live::serve(
             "127.0.0.1:0".parse().unwrap(),
             Arc::clone(&state),
@@ -109,11 +113,7 @@ fn run_loop(seconds: f64, live: bool) -> Vec<f64> {
             }
             total
         });
-        (
-            server,
-            propid::live::DriveView::new(state, excitation),
-            viewer,
-        )
+        (server, DriveView::new(state, played), viewer)
     });
     let t0 = Instant::now();
     let _ = run_drive(

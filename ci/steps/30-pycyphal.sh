@@ -6,6 +6,8 @@
 # Then congestion for real (tests/pycyphal/slowbus.py, a 125 kbit/s bus between propid and
 # PyCyphal that also stops for a second): the run completes, a SIGINT mid-stall and the end of the
 # pattern both leave STANDBY and zero last at PyCyphal, a killed relay stops propid with whole rows.
+# Every #[ignore]d test of both files must run and pass.
 set -euo pipefail
-cargo test -q -p propid --test pycyphal_interop -- --ignored
-cargo test -q -p propid --test pycyphal_congestion -- --ignored --test-threads=1
+. ci/lib.sh
+run_ignored propid host-cli/tests/pycyphal_interop.rs
+run_ignored propid host-cli/tests/pycyphal_congestion.rs --test-threads=1

@@ -15,6 +15,8 @@ echo "firmware: no allocator symbols linked"
 first=$(cargo run --release -q 2>&1)
 echo "$first"
 second=$(cargo run --release -q 2>&1)
+costs=$(echo "$first" | grep -c cost) || true
+[ "$costs" -gt 0 ] || { echo "the firmware printed no instruction counts" >&2; exit 1; }
 [ "$(echo "$first" | grep cost)" = "$(echo "$second" | grep cost)" ] || { echo "instruction counts differ between runs" >&2; exit 1; }
 echo "firmware: instruction counts repeat exactly"
 size "$elf" | awk 'NR==2 {printf "firmware footprint: flash %d bytes (text+rodata+vectors), static RAM %d bytes (data+bss)\n", $1+$2, $2+$3}'

@@ -21,6 +21,7 @@
 //! - [`node`]: a Sans-IO Cyphal node: heartbeat, GetInfo, the configured publishers and subscribers.
 //! - [`estimate`]: fixed-memory incremental least squares for the load's inertia and drag.
 //! - [`plant`]: the load model (inertia, drag, friction) the simulator and the firmware demo share.
+//! - [`sample`]: the [`sample::Sample`] every producer makes and every consumer takes.
 #![no_std]
 #![deny(missing_docs)]
 #![forbid(unsafe_code)]
@@ -30,4 +31,5 @@ pub mod dsdl;
 pub mod estimate;
 pub mod node;
 pub mod plant;
+pub mod sample;
 pub mod time;

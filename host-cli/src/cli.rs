@@ -1,10 +1,14 @@
-//! The command line as a library: what `main` runs, callable in-process too (the Python
-//! package's `propid` command runs it inside the interpreter; its `simulate` parses flags with it).
+//! The `propid` command line as a library function: [`run`] parses the arguments, runs the
+//! subcommand and turns its outcome into the exit status. The binary's `main` is one call to it,
+//! and the Python package runs the same function in-process (its signal handlers are installed
+//! by the commands that drive, for as long as they drive, never by `main`).
 
 use std::ffi::OsString;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+
+use crate::cmd;
 
 /// Identify the dynamics of a propeller or fan on a Zubax Telega drive over Cyphal/CAN.
 #[derive(Parser)]
@@ -16,37 +20,38 @@ pub struct Cli {
 }
 
 /// The subcommands.
+// Parsed once per process; the arguments' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 #[derive(Subcommand)]
 pub enum Command {
     /// Drive a Telega over Cyphal/CAN with the identification pattern and record its feedback as TSV.
-    Drive(crate::cmd::drive::Args),
+    Drive(cmd::drive::Args),
     /// Fit inertia and drag (m, c1, c2) to a recorded TSV, like the seed regressor but exact.
-    Fit(crate::cmd::fit::Args),
+    Fit(cmd::fit::Args),
     /// Simulate a test stand and write the TSV `drive` would have recorded.
-    Sim(crate::cmd::sim::Args),
+    Sim(cmd::sim::Args),
     /// Find what the fitted model gets wrong, name the cause, extend the model and measure the gain.
-    Diagnose(crate::cmd::diagnose::Args),
+    Diagnose(cmd::diagnose::Args),
     /// Convert measured logs from other test stands into propid's TSV.
     #[command(subcommand)]
-    Import(crate::cmd::import::Command),
+    Import(cmd::import::Command),
     /// Run a simulated Telega as a Cyphal node on a CAN interface.
-    SimDrive(crate::cmd::sim_drive::Args),
+    SimDrive(cmd::sim_drive::Args),
     /// Reassemble a candump log and write the feedback subject as TSV.
-    Replay(crate::cmd::replay::Args),
+    Replay(cmd::replay::Args),
     /// Design the excitation from a prior: the most precise J and c2 within the setpoint range.
-    Plan(crate::cmd::plan::Args),
+    Plan(cmd::plan::Args),
     /// Write one self-contained HTML report of a recording: fit, diagnosis, interactive plots.
-    Report(crate::cmd::report::Args),
+    Report(cmd::report::Args),
     /// Find Telega drives on the bus, check their registers for identification, fix and store them.
-    Telega(crate::cmd::telega::Args),
+    Telega(cmd::telega::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
-    Demo(crate::cmd::demo::Args),
+    Demo(cmd::demo::Args),
 }
 
 impl Cli {
     /// Runs the parsed command.
     pub fn run(self) -> anyhow::Result<()> {
-        use crate::cmd;
         match self.command {
             Command::Drive(a) => cmd::drive::run(a),
             Command::Fit(a) => cmd::fit::run(a),
@@ -63,9 +68,10 @@ impl Cli {
     }
 }
 
-/// Runs the command line `args` (the program name first) as `main` does: usage errors and
-/// failures are printed on stderr as `error: …`; returns the exit status (0 done, 1 failed,
-/// 2 bad input or usage, 3 cannot judge).
+/// Runs the command line `args` (the program's name first, as `std::env::args_os` gives them)
+/// as `main` does and returns the exit status: help and usage errors as clap prints them (0 or
+/// 2), a command's error on stderr as `error: …` with [`crate::exit_status_for`]'s status (1
+/// failed, 2 bad input, 3 cannot judge), 130 after an interruption (said already).
 pub fn exit_status<I, T>(args: I) -> u8
 where
     I: IntoIterator<Item = T>,
@@ -90,6 +96,8 @@ where
         {
             0
         }
+        // Said already (the drive's stop line); the shell's convention for SIGINT.
+        Err(err) if err.downcast_ref::<crate::Interrupted>().is_some() => 130,
         Err(err) => {
             eprintln!("error: {err:#}");
             crate::exit_status_for(&err)
@@ -104,4 +112,73 @@ where
     T: Into<OsString> + Clone,
 {
     ExitCode::from(exit_status(args))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::{Fields, Names};
+    use propid_drive_proto::registers::environment_name;
+
+    /// Every setting of every command, by its names.
+    fn settings_of(args: &[&str]) -> Vec<Names> {
+        let mut names = Vec::new();
+        let mut visit = |fields: &mut dyn Fields| fields.visit(&mut |n, _| names.push(n));
+        match Cli::try_parse_from(args).unwrap().command {
+            Command::Drive(mut a) => visit(&mut a),
+            Command::SimDrive(mut a) => visit(&mut a),
+            Command::Telega(mut a) => visit(&mut a),
+            Command::Plan(mut a) => visit(&mut a),
+            Command::Demo(mut a) => visit(&mut a),
+            _ => unreachable!("a command without settings"),
+        }
+        names
+    }
+
+    #[test]
+    fn a_registers_variable_is_its_name_as_pycyphal_maps_it_and_flags_are_unique() {
+        for args in [
+            &["propid", "drive"][..],
+            &["propid", "sim-drive"],
+            &["propid", "telega"],
+            &["propid", "plan", "--max-torque", "1"],
+            &["propid", "demo"],
+        ] {
+            let names = settings_of(args);
+            assert!(!names.is_empty(), "{args:?}");
+            for n in &names {
+                if let (Some(r), Some(e)) = (n.register, n.env) {
+                    assert_eq!(environment_name(r), e, "{args:?}: {n:?}");
+                }
+                // The flag reaches its own slot: a flag given is set where its names say.
+                if let Some(flag) = n.flag {
+                    let mut given = args.to_vec();
+                    let long = format!("--{flag}");
+                    given.extend([long.as_str(), "x"]);
+                    let mut set = Vec::new();
+                    let mut record = |fields: &mut dyn Fields| {
+                        fields.visit(&mut |m, slot| {
+                            if slot.is_set() {
+                                set.push(m)
+                            }
+                        })
+                    };
+                    match Cli::try_parse_from(&given).unwrap().command {
+                        Command::Drive(mut a) => record(&mut a),
+                        Command::SimDrive(mut a) => record(&mut a),
+                        Command::Telega(mut a) => record(&mut a),
+                        Command::Plan(mut a) => record(&mut a),
+                        Command::Demo(mut a) => record(&mut a),
+                        _ => unreachable!(),
+                    }
+                    assert_eq!(set, [*n], "{given:?}");
+                }
+            }
+            let mut flags: Vec<_> = names.iter().filter_map(|n| n.flag).collect();
+            flags.sort();
+            let count = flags.len();
+            flags.dedup();
+            assert_eq!(flags.len(), count, "{args:?}: a flag named twice");
+        }
+    }
 }

@@ -11,12 +11,16 @@
 
 use std::fmt::Write as _;
 
-use crate::plot::{Figure, Style};
+use propid_science::figure::{Figure, Series, Style};
 
 /// uPlot's minified script (MIT, see `assets/uplot/LICENSE`).
 const UPLOT_JS: &str = include_str!("../assets/uplot/uPlot.iife.min.js");
 /// uPlot's stylesheet.
 const UPLOT_CSS: &str = include_str!("../assets/uplot/uPlot.min.css");
+/// The pages' own style.
+const PAGE_CSS: &str = include_str!("../assets/page/page.css");
+/// The helper that draws one chart of a page.
+const CHART_JS: &str = include_str!("../assets/page/chart.js");
 
 /// Largest number of points kept per series (longer series are decimated by stride).
 const MAX_POINTS: usize = 4000;
@@ -61,7 +65,7 @@ pub fn json_string(s: &str) -> String {
 }
 
 /// One panel's data in uPlot's column layout: `[[x…], [y1…], [y2…]]`, x merged and sorted.
-fn panel_columns(series: &[crate::plot::Series]) -> Vec<Vec<Option<f64>>> {
+fn panel_columns(series: &[Series]) -> Vec<Vec<Option<f64>>> {
     let decimated: Vec<Vec<(f64, f64)>> = series
         .iter()
         .map(|s| {
@@ -139,38 +143,17 @@ pub fn figure_section(figure: &Figure, id: &str) -> String {
     html
 }
 
-/// The script every page carries: uPlot and a helper that draws one chart (drag to zoom,
-/// double-click to reset).
-fn chart_script() -> String {
-    format!(
-        "<script>{UPLOT_JS}</script>\n<script>\n\
-function propidChart(id, title, yLabel, series, data) {{\n\
-  const el = document.getElementById(id);\n\
-  const width = Math.max(400, Math.min(1200, (el.parentElement || document.body).clientWidth || 1000));\n\
-  const opts = {{ width, height: 280, series, scales: {{ x: {{ time: false }} }},\n\
-    axes: [{{}}, {{ label: yLabel, size: 70 }}], cursor: {{ drag: {{ x: true, y: false }} }} }};\n\
-  el.propidPlot = new uPlot(opts, data, el);\n\
-}}\n</script>\n"
-    )
-}
-
-/// A whole page: `title`, then the sections (already HTML), with uPlot embedded.
+/// A whole page: `title`, then the sections (already HTML), with uPlot, the chart helper and
+/// the style embedded (nothing is fetched: the file opens offline).
 pub fn page(title: &str, sections: &[String]) -> String {
+    let t = escape(title);
     let mut html = format!(
         "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n\
 <meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n\
-<title>{t}</title>\n<style>{UPLOT_CSS}\n\
-body {{ font-family: system-ui, sans-serif; margin: 1.5em auto; max-width: 1240px; padding: 0 1em; color: #222; }}\n\
-table {{ border-collapse: collapse; margin: 0.5em 0 1em; }}\n\
-td, th {{ border: 1px solid #ccc; padding: 0.25em 0.6em; text-align: left; }}\n\
-th {{ background: #f4f4f4; }} td.num {{ text-align: right; font-variant-numeric: tabular-nums; }}\n\
-pre {{ background: #f7f7f7; padding: 0.8em; overflow-x: auto; }}\n\
-.chart {{ margin-bottom: 1em; }} .verdict {{ font-size: 1.1em; padding: 0.6em; border-left: 4px solid #1f77b4; background: #eef5fb; }}\n\
-</style>\n",
-        t = escape(title)
+<title>{t}</title>\n<style>{UPLOT_CSS}\n{PAGE_CSS}</style>\n\
+<script>{UPLOT_JS}</script>\n<script>\n{CHART_JS}</script>\n\
+</head><body>\n<h1>{t}</h1>\n"
     );
-    html.push_str(&chart_script());
-    let _ = write!(html, "</head><body>\n<h1>{}</h1>\n", escape(title));
     for s in sections {
         html.push_str(s);
     }
@@ -205,7 +188,7 @@ pub fn table(header: &[&str], rows: &[Vec<String>]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::plot::{Panel, Series};
+    use propid_science::figure::Panel;
 
     #[test]
     fn panels_merge_x_and_mark_gaps() {

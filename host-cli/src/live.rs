@@ -17,214 +17,15 @@
 
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::Context;
-use serde::Serialize;
+use propid_drive_host::live::{DriveView, LiveState};
+use propid_drive_host::stand::Played;
 
-/// How many samples the page's ring keeps (about 20 s at 500 Hz).
-const RING: usize = 10_000;
 /// How often the page is sent what is new.
 const PUSH_PERIOD: Duration = Duration::from_millis(100);
-
-/// One point of the live plots.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct LivePoint {
-    /// Device time [s].
-    pub t: f64,
-    /// Ratiometric setpoint commanded.
-    pub setpoint: f64,
-    /// Reported torque [N·m].
-    pub force: f64,
-    /// Velocity [rad/s].
-    pub velocity: f64,
-    /// Acceleration [rad/s²].
-    pub acceleration: f64,
-}
-
-/// The running estimate with its standard errors.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct LiveEstimate {
-    /// Device time of the estimate [s].
-    pub t: f64,
-    /// Inertia [kg·m²].
-    pub j: f64,
-    /// Its standard error.
-    pub j_stderr: f64,
-    /// Quadratic drag [N·m·s²/rad²].
-    pub c2: f64,
-    /// Its standard error.
-    pub c2_stderr: f64,
-}
-
-/// Bus health as the drive loop counts it.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
-pub struct LiveBus {
-    /// Frames received per second.
-    pub frames_rx_per_s: f64,
-    /// Frames sent per second.
-    pub frames_tx_per_s: f64,
-    /// Frames dropped (deadline passed, superseded, queue full) so far.
-    pub tx_dropped: u64,
-    /// Transfers the reassembler rejected so far.
-    pub rx_rejected: u64,
-    /// Errors the adapter reported so far.
-    pub adapter_errors: u64,
-}
-
-#[derive(Default)]
-struct Inner {
-    /// Sequence number of the newest point (points are numbered from 1).
-    seq: u64,
-    points: std::collections::VecDeque<LivePoint>,
-    estimates: Vec<LiveEstimate>,
-    readiness: &'static str,
-    bus: LiveBus,
-    status: String,
-    finished: bool,
-}
-
-/// What the page shows, shared between the control loop's [`LiveFeed`] and the server.
-#[derive(Default)]
-pub struct LiveState {
-    inner: Mutex<Inner>,
-}
-
-/// The control loop's handle: collects updates and hands them over without ever waiting.
-pub struct LiveFeed {
-    state: Arc<LiveState>,
-    pending: Vec<LivePoint>,
-    estimate: Option<LiveEstimate>,
-    readiness: Option<&'static str>,
-    bus: Option<LiveBus>,
-    status: Option<(String, bool)>,
-}
-
-impl LiveFeed {
-    /// A feed into `state`.
-    pub fn new(state: Arc<LiveState>) -> Self {
-        LiveFeed {
-            state,
-            pending: Vec::new(),
-            estimate: None,
-            readiness: None,
-            bus: None,
-            status: None,
-        }
-    }
-
-    /// A new feedback sample.
-    pub fn sample(&mut self, point: LivePoint) {
-        if self.pending.len() < RING {
-            self.pending.push(point);
-        }
-        self.publish();
-    }
-
-    /// The running estimate changed.
-    pub fn estimate(&mut self, estimate: LiveEstimate) {
-        self.estimate = Some(estimate);
-        self.publish();
-    }
-
-    /// The readiness commanded.
-    pub fn readiness(&mut self, readiness: &'static str) {
-        self.readiness = Some(readiness);
-        self.publish();
-    }
-
-    /// Bus counters.
-    pub fn bus(&mut self, bus: LiveBus) {
-        self.bus = Some(bus);
-        self.publish();
-    }
-
-    /// A status line (phase, stop reason); `finished` once the drive stopped.
-    pub fn status(&mut self, status: impl Into<String>, finished: bool) {
-        self.status = Some((status.into(), finished));
-        self.publish();
-    }
-
-    /// Hands what is pending to the page's side if it is not busy; returns at once either way.
-    pub fn publish(&mut self) {
-        let Ok(mut inner) = self.state.inner.try_lock() else {
-            return;
-        };
-        for p in self.pending.drain(..) {
-            inner.seq += 1;
-            if inner.points.len() == RING {
-                inner.points.pop_front();
-            }
-            inner.points.push_back(p);
-        }
-        if let Some(e) = self.estimate.take() {
-            if inner.estimates.len() < 100_000 {
-                inner.estimates.push(e);
-            }
-        }
-        if let Some(r) = self.readiness.take() {
-            inner.readiness = r;
-        }
-        if let Some(b) = self.bus.take() {
-            inner.bus = b;
-        }
-        if let Some((s, finished)) = self.status.take() {
-            inner.status = s;
-            inner.finished |= finished;
-        }
-    }
-
-    /// Publishes what is pending, waiting for the lock (for the end of a run, not the loop).
-    pub fn flush(&mut self) {
-        for _ in 0..100 {
-            self.publish();
-            if self.pending.is_empty() && self.status.is_none() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(1));
-        }
-    }
-}
-
-/// One Server-Sent Events message: points after `after`, the estimates after index
-/// `estimates_after`, and the current state.
-#[derive(Serialize)]
-struct Update<'a> {
-    seq: u64,
-    points: Vec<LivePoint>,
-    estimates: &'a [LiveEstimate],
-    readiness: &'a str,
-    bus: LiveBus,
-    status: &'a str,
-    finished: bool,
-}
-
-impl LiveState {
-    /// The JSON of what is new since point `after` and estimate index `estimates_after`; returns
-    /// the new cursors.
-    fn update_since(&self, after: u64, estimates_after: usize) -> (String, u64, usize) {
-        let inner = match self.inner.lock() {
-            Ok(g) => g,
-            Err(poisoned) => poisoned.into_inner(),
-        };
-        let oldest = inner.seq - inner.points.len() as u64;
-        let skip = after.saturating_sub(oldest) as usize;
-        let points: Vec<LivePoint> = inner.points.iter().skip(skip).copied().collect();
-        let from = estimates_after.min(inner.estimates.len());
-        let update = Update {
-            seq: inner.seq,
-            points,
-            estimates: &inner.estimates[from..],
-            readiness: inner.readiness,
-            bus: inner.bus,
-            status: &inner.status,
-            finished: inner.finished,
-        };
-        let json = serde_json::to_string(&update).unwrap_or_else(|_| "{}".into());
-        (json, inner.seq, inner.estimates.len())
-    }
-}
 
 /// Writes a Server-Sent Events response on the raw connection: a header, then what is new every
 /// [`PUSH_PERIOD`], each message flushed; ends when the viewer goes or the server shuts down.
@@ -359,7 +160,7 @@ fn accept_loop(
     shutdown: &Arc<AtomicBool>,
     title: &str,
 ) {
-    let page = live_page(title, token);
+    let page = live_page(title);
     for request in server.incoming_requests() {
         if shutdown.load(Ordering::Relaxed) {
             break;
@@ -411,207 +212,18 @@ fn accept_loop(
     }
 }
 
+/// The page's markup, style and application (files, included at build time).
+const LIVE_HTML: &str = include_str!("../assets/live/live.html");
+/// The live page's own style.
+const LIVE_CSS: &str = include_str!("../assets/live/live.css");
+/// The live page's application: reads the event stream, draws, sends STOP.
+const LIVE_JS: &str = include_str!("../assets/live/live.js");
+
 /// The page: uPlot charts fed by the event stream, the estimate, readiness, bus health, STOP.
-fn live_page(title: &str, token: &str) -> String {
-    let body = format!(
-        r##"<section>
-<div class="verdict" id="status">connecting…</div>
-<p><button id="stop" style="font-size:1.4em;padding:0.4em 1.6em;background:#c62828;color:#fff;border:0;border-radius:6px;cursor:pointer">STOP</button>
-&nbsp; readiness <b id="readiness">–</b></p>
-<table><tr><th>J [kg·m²]</th><th>c2 [N·m·s²/rad²]</th><th>feedback frames/s</th><th>sent frames/s</th><th>tx dropped</th><th>rx rejected</th><th>adapter errors</th></tr>
-<tr><td class="num" id="j">–</td><td class="num" id="c2">–</td><td class="num" id="rx">–</td><td class="num" id="tx">–</td><td class="num" id="drop">–</td><td class="num" id="rej">–</td><td class="num" id="aerr">–</td></tr></table>
-</section>
-<h3>setpoint and torque</h3><div class="chart" id="c-force"></div>
-<h3>velocity [rad/s]</h3><div class="chart" id="c-vel"></div>
-<h3>acceleration [rad/s²]</h3><div class="chart" id="c-acc"></div>
-<h3>running J (±2σ)</h3><div class="chart" id="c-j"></div>
-<h3>running c2 (±2σ)</h3><div class="chart" id="c-c2"></div>
-<script>
-const TOKEN = {token};
-const WINDOW_S = 10;
-const pts = {{t: [], sp: [], f: [], v: [], a: []}};
-const est = {{t: [], j: [], jlo: [], jhi: [], c2: [], clo: [], chi: []}};
-function mk(id, series) {{
-  const el = document.getElementById(id);
-  const width = Math.max(400, Math.min(1200, document.body.clientWidth - 40));
-  return new uPlot({{width, height: 200, series: [{{label: "t [s]"}}].concat(series),
-    scales: {{x: {{time: false}}}},
-    axes: [{{}}, {{size: 80, values: (u, vals) => vals.map(v => (v !== 0 && Math.abs(v) < 1e-2) ? v.toExponential(2) : v)}}]}}, [[]].concat(series.map(() => [])), el);
-}}
-const band = (label, colour) => [{{label, stroke: colour, width: 1.5}},
-  {{label: "−2σ", stroke: colour, dash: [4, 4], width: 1}}, {{label: "+2σ", stroke: colour, dash: [4, 4], width: 1}}];
-const charts = {{
-  force: mk("c-force", [{{label: "setpoint ×0.1", stroke: "#888", width: 1}}, {{label: "torque [N·m]", stroke: "#1f77b4", width: 1.5}}]),
-  vel: mk("c-vel", [{{label: "velocity", stroke: "#2ca02c", width: 1.5}}]),
-  acc: mk("c-acc", [{{label: "acceleration", stroke: "#d62728", width: 1}}]),
-  j: mk("c-j", band("J", "#9467bd")),
-  c2: mk("c-c2", band("c2", "#ff7f0e")),
-}};
-const fmt = (x) => (x === null || x === undefined || !isFinite(x)) ? "–" : x.toExponential(4);
-function redraw() {{
-  const n = pts.t.length;
-  if (n > 0) {{
-    const t0 = pts.t[n - 1] - WINDOW_S;
-    let i = 0; while (i < n && pts.t[i] < t0) i++;
-    for (const k in pts) pts[k].splice(0, i);
-  }}
-  charts.force.setData([pts.t, pts.sp.map(x => x * 0.1), pts.f]);
-  charts.vel.setData([pts.t, pts.v]);
-  charts.acc.setData([pts.t, pts.a]);
-  charts.j.setData([est.t, est.j, est.jlo, est.jhi]);
-  charts.c2.setData([est.t, est.c2, est.clo, est.chi]);
-}}
-let last = 0;
-const source = new EventSource("/events?token=" + TOKEN);
-// Once STOP is acknowledged, an update still in flight from before it (status "running") must
-// not take the acknowledgement off the page; the drive's final status replaces it.
-let stopping = false;
-source.onmessage = (ev) => {{
-  const u = JSON.parse(ev.data);
-  for (const p of u.points) {{
-    pts.t.push(p.t); pts.sp.push(p.setpoint); pts.f.push(p.force); pts.v.push(p.velocity); pts.a.push(p.acceleration);
-  }}
-  for (const e of u.estimates) {{
-    est.t.push(e.t); est.j.push(e.j); est.jlo.push(e.j - 2 * e.j_stderr); est.jhi.push(e.j + 2 * e.j_stderr);
-    est.c2.push(e.c2); est.clo.push(e.c2 - 2 * e.c2_stderr); est.chi.push(e.c2 + 2 * e.c2_stderr);
-  }}
-  last = u.seq;
-  if (!stopping || u.finished) document.getElementById("status").textContent = u.status || "running";
-  document.getElementById("readiness").textContent = u.readiness || "–";
-  const e = est.j.length ? est.j.length - 1 : -1;
-  document.getElementById("j").textContent = e >= 0 ? fmt(est.j[e]) + " ± " + fmt((est.jhi[e] - est.j[e]) / 2) : "–";
-  document.getElementById("c2").textContent = e >= 0 ? fmt(est.c2[e]) + " ± " + fmt((est.chi[e] - est.c2[e]) / 2) : "–";
-  const num = (x) => (x === null || x === undefined || !isFinite(x)) ? "–" : x.toFixed(0);
-  document.getElementById("rx").textContent = num(u.bus.frames_rx_per_s);
-  document.getElementById("tx").textContent = num(u.bus.frames_tx_per_s);
-  document.getElementById("drop").textContent = u.bus.tx_dropped;
-  document.getElementById("rej").textContent = u.bus.rx_rejected;
-  document.getElementById("aerr").textContent = u.bus.adapter_errors;
-  document.body.dataset.samples = String(last);
-  document.body.dataset.finished = String(u.finished);
-  redraw();
-}};
-document.getElementById("stop").onclick = async () => {{
-  const r = await fetch("/stop", {{method: "POST", headers: {{"X-Propid-Token": TOKEN}}}});
-  stopping = r.ok;
-  document.getElementById("status").textContent = await r.text();
-}};
-</script>
-"##,
-        token = crate::html::json_string(token),
-    );
+/// The same for every run: the script reads the token from the page's address.
+fn live_page(title: &str) -> String {
+    let body = format!("<style>{LIVE_CSS}</style>\n{LIVE_HTML}<script>\n{LIVE_JS}</script>\n");
     crate::html::page(title, &[body])
-}
-
-/// Feeds the live page from a drive's events (rows, progress, the stop).
-pub struct DriveView {
-    feed: LiveFeed,
-    excitation: propid_science::excitation::Excitation,
-    first_t: Option<f64>,
-    last_progress: Option<std::time::Instant>,
-}
-
-impl DriveView {
-    /// A view of a drive playing `excitation`, published into `state`.
-    pub fn new(state: Arc<LiveState>, excitation: propid_science::excitation::Excitation) -> Self {
-        let mut feed = LiveFeed::new(state);
-        feed.readiness("ENGAGED");
-        feed.status(
-            "init phase: at the high setpoint, feedback not recorded",
-            false,
-        );
-        DriveView {
-            feed,
-            excitation,
-            first_t: None,
-            last_progress: None,
-        }
-    }
-
-    /// Takes one event of the drive (never blocks).
-    pub fn on_event(&mut self, event: &propid_drive::drive::DriveEvent) {
-        use propid_drive::drive::DriveEvent;
-        match event {
-            DriveEvent::PatternStarted => self.feed.status(
-                format!(
-                    "running: {} pattern, {} s",
-                    self.excitation.pattern, self.excitation.duration
-                ),
-                false,
-            ),
-            DriveEvent::Row(row) => {
-                let s = row.sample;
-                // The device clock's time since the first row stands for the pattern's time.
-                let t0 = *self.first_t.get_or_insert(s.t);
-                self.feed.sample(LivePoint {
-                    t: s.t,
-                    setpoint: self.excitation.setpoint(s.t - t0),
-                    force: s.force,
-                    velocity: s.velocity,
-                    acceleration: s.acceleration,
-                });
-            }
-            DriveEvent::Progress(p) => {
-                let now = std::time::Instant::now();
-                let dt = self
-                    .last_progress
-                    .map_or(1.0, |l| now.duration_since(l).as_secs_f64().max(1e-3));
-                self.last_progress = Some(now);
-                if let Some(e) = p.estimate {
-                    self.feed.estimate(LiveEstimate {
-                        t: p.elapsed,
-                        j: e.j,
-                        j_stderr: e.j_stderr,
-                        c2: e.c2,
-                        c2_stderr: e.c2_stderr,
-                    });
-                }
-                self.feed.bus(LiveBus {
-                    frames_rx_per_s: p.feedback_per_s as f64 / dt,
-                    frames_tx_per_s: f64::NAN,
-                    tx_dropped: p.tx.dropped,
-                    rx_rejected: p.dropped_transfers,
-                    adapter_errors: p.tx.refused,
-                });
-            }
-            DriveEvent::Stopping(reason) => {
-                self.feed.readiness("STANDBY");
-                self.feed.status(
-                    format!("stopping ({reason}): STANDBY and a zero setpoint"),
-                    false,
-                );
-            }
-            DriveEvent::Stopped(report) => {
-                self.feed.readiness("STANDBY");
-                // The page's last word says what was sent (a STANDBY the drive never handed to
-                // the link is not claimed): the final status replaces "stopping …: STANDBY", and
-                // once said "stopped (…); N rows" without it, so the safety state left the page.
-                let sent = format!(
-                    "{}{} zero setpoint{} sent",
-                    if report.standby_sent > 0 {
-                        "STANDBY and "
-                    } else {
-                        ""
-                    },
-                    report.zero_setpoints_sent,
-                    if report.zero_setpoints_sent == 1 {
-                        ""
-                    } else {
-                        "s"
-                    },
-                );
-                self.feed.status(
-                    format!(
-                        "stopped ({}): {sent}; {} rows recorded",
-                        report.reason, report.rows
-                    ),
-                    true,
-                );
-                self.feed.flush();
-            }
-            DriveEvent::RegisterWritten { .. } => {}
-        }
-    }
 }
 
 /// Starts the live page for a drive if `addr` is given: prints the URL on stderr.
@@ -619,7 +231,7 @@ pub fn start_for_drive(
     addr: Option<&str>,
     allow_remote: bool,
     stop: &Arc<AtomicBool>,
-    excitation: propid_science::excitation::Excitation,
+    played: Played,
     title: &str,
 ) -> anyhow::Result<Option<(LiveServer, DriveView)>> {
     let Some(addr) = addr else {
@@ -642,12 +254,13 @@ pub fn start_for_drive(
         "live: open {} (STOP there does what Ctrl-C does)",
         server.url()
     );
-    Ok(Some((server, DriveView::new(state, excitation))))
+    Ok(Some((server, DriveView::new(state, played))))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use propid_drive_host::live::{LiveFeed, LivePoint};
     use std::io::{BufRead, BufReader, Read, Write};
     use std::net::TcpStream;
 

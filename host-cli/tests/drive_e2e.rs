@@ -11,10 +11,13 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use propid_core::dsdl::Readiness;
-use propid_drive::drive::{run_drive, DriveConfig};
-use propid_drive::realtime::SystemClock;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig, SimDriveSummary};
-use propid_drive::StopReason;
+use propid_drive_host::drive::run_drive;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::DriveConfig;
+use propid_drive_proto::sim_drive::{SimDriveConfig, SimDriveSummary};
+use propid_drive_proto::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 use propid_slcan::SlcanTransport;
@@ -33,7 +36,7 @@ fn real_time_turn() -> std::sync::MutexGuard<'static, ()> {
 }
 
 fn sim_cfg() -> SimDriveConfig {
-    SimDriveConfig::example(StandConfig::default(), 5)
+    SimDriveConfig::example()
 }
 
 fn start_telega(
@@ -46,7 +49,8 @@ fn start_telega(
     let s = Arc::clone(&stop);
     let handle = std::thread::spawn(move || {
         let mut t = SlcanTransport::from_tty(port, "telega").unwrap();
-        run_sim_drive(sim_cfg(), &mut t, &SystemClock, &s)
+        let plant = StandPlant::boxed(StandConfig::default(), 5).unwrap();
+        run_sim_drive(sim_cfg(), plant, &mut t, &SystemClock, &s)
     });
     (stop, handle)
 }
@@ -77,14 +81,17 @@ fn drives_the_simulated_telega_and_fits_it() {
     let (stop, telega) = start_telega(telega_end);
     let cfg = DriveConfig {
         fit: true,
-        ..DriveConfig::example(Excitation {
-            lo: 0.1,
-            hi: 0.9,
-            period: 2.0,
-            duration: 10.0,
-            init_duration: 1.0,
-            pattern: Pattern::Sine,
-        })
+        ..DriveConfig::example(
+            Played::try_from(Excitation {
+                lo: 0.1,
+                hi: 0.9,
+                period: 2.0,
+                duration: 10.0,
+                init_duration: 1.0,
+                pattern: Pattern::Sine,
+            })
+            .unwrap(),
+        )
     };
     let mut out = Vec::new();
     let mut t = SlcanTransport::from_tty(drive_end, "driver").unwrap();
@@ -210,7 +217,7 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
         (&[("SETPOINT_RAT_LO_HI", "0.1 1.5")], "lo < hi ≤ 1"),
         (
             &[("UAVCAN__SUB__FB_DYN__ID", "")],
-            "--feedback-id (register uavcan.sub.fb_dyn.id, UAVCAN__SUB__FB_DYN__ID) is not set",
+            "--feedback-id is not set (nor its register uavcan.sub.fb_dyn.id in a --registers file, nor its environment variable UAVCAN__SUB__FB_DYN__ID)",
         ),
         (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
     ];

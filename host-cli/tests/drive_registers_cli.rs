@@ -108,13 +108,13 @@ fn bad_values_are_refused_naming_origin_and_register() {
             vec![],
             vec![
                 &line3,
-                "`fast` is not a valid real64[1] for register period",
+                "register period: `fast` is not a valid real64[1] (flag --period, environment variable PERIOD)",
             ],
         ),
         (
             "no_such_register: 1\n",
             vec![],
-            vec![&line1, "no register named no_such_register"],
+            vec![&line1, "no_such_register is not a register of this command"],
         ),
         (
             "just text\n",
@@ -125,8 +125,9 @@ fn bad_values_are_refused_naming_origin_and_register() {
             "pattern_duration: 0\n",
             ids.to_vec(),
             vec![
-                "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
-                "above 0",
+                &line1,
+                "register pattern_duration: must be a finite number above 0",
+                "(flag --pattern-duration, environment variable PATTERN_DURATION)",
             ],
         ),
         (
@@ -148,7 +149,10 @@ fn bad_values_are_refused_naming_origin_and_register() {
         (
             "",
             vec![("SETPOINT_RAT_LO_HI", "0.9 0.1"), ids[0], ids[1], ids[2]],
-            vec!["--setpoint-rat-lo-hi (register setpoint_rat_lo_hi, SETPOINT_RAT_LO_HI)"],
+            vec![
+                "environment variable SETPOINT_RAT_LO_HI: the setpoint range must satisfy -1 ≤ lo < hi ≤ 1 (got lo = 0.9, hi = 0.1)",
+                "(flag --setpoint-rat-lo-hi, register setpoint_rat_lo_hi)",
+            ],
         ),
         (
             "",
@@ -158,7 +162,7 @@ fn bad_values_are_refused_naming_origin_and_register() {
         (
             "",
             vec![ids[1], ids[2]],
-            vec!["--node-id (register uavcan.node.id, UAVCAN__NODE__ID) is not set"],
+            vec!["--node-id is not set (nor its register uavcan.node.id in a --registers file, nor its environment variable UAVCAN__NODE__ID)"],
         ),
     ];
     for (contents, env, wants) in cases {
@@ -196,7 +200,7 @@ fn telega_refuses_bad_arguments_before_the_bus() {
         ),
         (
             &["--listen", "0"],
-            "--listen must be a number of seconds in (0, 60]",
+            "--listen: must be a finite number above 0 and at most 60 s (got 0)",
         ),
         (&["--drive", "200"], "node-ID 200 is out of range"),
     ] {

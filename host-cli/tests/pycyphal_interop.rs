@@ -6,7 +6,7 @@
 //! drain (it reads more slowly than propid writes, above all while it starts): the run completes,
 //! the summary reports what was dropped, and PyCyphal's last readiness is STANDBY, its last
 //! setpoint zero. (A really congested bus: `pycyphal_congestion.rs`; in virtual time:
-//! `drive/tests/virtual_run.rs`.)
+//! `drive-host/tests/virtual_run.rs`.)
 //! Needs python3 with `pycyphal[transport-can-pythoncan]` and socat: `#[ignore]`d, run explicitly
 //! by ci/steps/30-pycyphal.sh (`cargo test -p propid --test pycyphal_interop -- --ignored`).
 

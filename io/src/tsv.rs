@@ -8,30 +8,7 @@
 
 use std::io::{BufRead, Write};
 
-/// One measurement of the drive's dynamics feedback.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Sample {
-    /// Device time [s].
-    pub t: f64,
-    /// Torque (the drive's estimate) [N·m].
-    pub force: f64,
-    /// Angular velocity [rad/s].
-    pub velocity: f64,
-    /// Angular acceleration [rad/s²].
-    pub acceleration: f64,
-    /// Rotor angle [rad], when the source has it (NaN otherwise).
-    pub position: f64,
-}
-
-impl Sample {
-    /// True if time, force, velocity and acceleration are all finite (position may be NaN).
-    pub fn is_finite(&self) -> bool {
-        self.t.is_finite()
-            && self.force.is_finite()
-            && self.velocity.is_finite()
-            && self.acceleration.is_finite()
-    }
-}
+pub use propid_core::sample::Sample;
 
 /// A TSV row: the sample plus the host's receive time, if the file has it.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -7,6 +7,183 @@
 
 use std::fmt;
 
+/// A field of the configuration, by its dotted path ([`Field::path`]): what a [`ConfigError`]
+/// names, typed, so a caller can say which of its own settings set it (and a new field is one
+/// new variant every such caller must handle).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Field {
+    /// `disturbance.amplitude`.
+    DisturbanceAmplitude,
+    /// `disturbance.hz`.
+    DisturbanceHz,
+    /// `disturbance.start`.
+    DisturbanceStart,
+    /// `disturbance.width`.
+    DisturbanceWidth,
+    /// `drive.braking.off_threshold`.
+    DriveBrakingOffThreshold,
+    /// `drive.braking.on_threshold`.
+    DriveBrakingOnThreshold,
+    /// `drive.braking.torque`.
+    DriveBrakingTorque,
+    /// `drive.control_rate`.
+    DriveControlRate,
+    /// `drive.current_loop.bandwidth`.
+    DriveCurrentLoopBandwidth,
+    /// `drive.kt_error`.
+    DriveKtError,
+    /// `drive.max_torque`.
+    DriveMaxTorque,
+    /// `link.clock.drift`.
+    LinkClockDrift,
+    /// `link.clock.offset`.
+    LinkClockOffset,
+    /// `link.clock.rate_error`.
+    LinkClockRateError,
+    /// `link.clock.stamp_jitter`.
+    LinkClockStampJitter,
+    /// `link.drop_probability`.
+    LinkDropProbability,
+    /// `link.host_offset`.
+    LinkHostOffset,
+    /// `link.latency`.
+    LinkLatency,
+    /// `link.latency_jitter`.
+    LinkLatencyJitter,
+    /// `link.rate`.
+    LinkRate,
+    /// `motor.inductance`.
+    MotorInductance,
+    /// `motor.kt`.
+    MotorKt,
+    /// `motor.resistance`.
+    MotorResistance,
+    /// `motor.supply_voltage`.
+    MotorSupplyVoltage,
+    /// `rotor.bearing.breakaway`.
+    RotorBearingBreakaway,
+    /// `rotor.bearing.coulomb`.
+    RotorBearingCoulomb,
+    /// `rotor.bearing.stribeck_speed`.
+    RotorBearingStribeckSpeed,
+    /// `rotor.bearing.viscous`.
+    RotorBearingViscous,
+    /// `rotor.cogging.amplitude`.
+    RotorCoggingAmplitude,
+    /// `rotor.cogging.harmonic`.
+    RotorCoggingHarmonic,
+    /// `rotor.cogging.phase`.
+    RotorCoggingPhase,
+    /// `rotor.drag.cq_reference_speed`.
+    RotorDragCqReferenceSpeed,
+    /// `rotor.drag.cq_slope`.
+    RotorDragCqSlope,
+    /// `rotor.drag.exponent`.
+    RotorDragExponent,
+    /// `rotor.drag.k`.
+    RotorDragK,
+    /// `rotor.inertia`.
+    RotorInertia,
+    /// `run.duration`.
+    RunDuration,
+    /// `run.init_duration`.
+    RunInitDuration,
+    /// `run.init_setpoint`.
+    RunInitSetpoint,
+    /// `sensing.kinematics.acceleration_filter`.
+    SensingKinematicsAccelerationFilter,
+    /// `sensing.kinematics.counts_per_rev`.
+    SensingKinematicsCountsPerRev,
+    /// `sensing.kinematics.velocity.damping`.
+    SensingKinematicsVelocityDamping,
+    /// `sensing.kinematics.velocity.natural_hz`.
+    SensingKinematicsVelocityNaturalHz,
+    /// `sensing.noise.acceleration`.
+    SensingNoiseAcceleration,
+    /// `sensing.noise.force`.
+    SensingNoiseForce,
+    /// `sensing.noise.velocity`.
+    SensingNoiseVelocity,
+    /// `sensing.torque.damping`.
+    SensingTorqueDamping,
+    /// `sensing.torque.filter`.
+    SensingTorqueFilter,
+    /// `sensing.torque.natural_hz`.
+    SensingTorqueNaturalHz,
+    /// `sensing.torque.noise`.
+    SensingTorqueNoise,
+    /// `sensing.torque.offset`.
+    SensingTorqueOffset,
+    /// `sensing.torque.rate`.
+    SensingTorqueRate,
+}
+
+impl Field {
+    /// The field's dotted path, e.g. `link.rate`.
+    pub const fn path(self) -> &'static str {
+        match self {
+            Field::DisturbanceAmplitude => "disturbance.amplitude",
+            Field::DisturbanceHz => "disturbance.hz",
+            Field::DisturbanceStart => "disturbance.start",
+            Field::DisturbanceWidth => "disturbance.width",
+            Field::DriveBrakingOffThreshold => "drive.braking.off_threshold",
+            Field::DriveBrakingOnThreshold => "drive.braking.on_threshold",
+            Field::DriveBrakingTorque => "drive.braking.torque",
+            Field::DriveControlRate => "drive.control_rate",
+            Field::DriveCurrentLoopBandwidth => "drive.current_loop.bandwidth",
+            Field::DriveKtError => "drive.kt_error",
+            Field::DriveMaxTorque => "drive.max_torque",
+            Field::LinkClockDrift => "link.clock.drift",
+            Field::LinkClockOffset => "link.clock.offset",
+            Field::LinkClockRateError => "link.clock.rate_error",
+            Field::LinkClockStampJitter => "link.clock.stamp_jitter",
+            Field::LinkDropProbability => "link.drop_probability",
+            Field::LinkHostOffset => "link.host_offset",
+            Field::LinkLatency => "link.latency",
+            Field::LinkLatencyJitter => "link.latency_jitter",
+            Field::LinkRate => "link.rate",
+            Field::MotorInductance => "motor.inductance",
+            Field::MotorKt => "motor.kt",
+            Field::MotorResistance => "motor.resistance",
+            Field::MotorSupplyVoltage => "motor.supply_voltage",
+            Field::RotorBearingBreakaway => "rotor.bearing.breakaway",
+            Field::RotorBearingCoulomb => "rotor.bearing.coulomb",
+            Field::RotorBearingStribeckSpeed => "rotor.bearing.stribeck_speed",
+            Field::RotorBearingViscous => "rotor.bearing.viscous",
+            Field::RotorCoggingAmplitude => "rotor.cogging.amplitude",
+            Field::RotorCoggingHarmonic => "rotor.cogging.harmonic",
+            Field::RotorCoggingPhase => "rotor.cogging.phase",
+            Field::RotorDragCqReferenceSpeed => "rotor.drag.cq_reference_speed",
+            Field::RotorDragCqSlope => "rotor.drag.cq_slope",
+            Field::RotorDragExponent => "rotor.drag.exponent",
+            Field::RotorDragK => "rotor.drag.k",
+            Field::RotorInertia => "rotor.inertia",
+            Field::RunDuration => "run.duration",
+            Field::RunInitDuration => "run.init_duration",
+            Field::RunInitSetpoint => "run.init_setpoint",
+            Field::SensingKinematicsAccelerationFilter => "sensing.kinematics.acceleration_filter",
+            Field::SensingKinematicsCountsPerRev => "sensing.kinematics.counts_per_rev",
+            Field::SensingKinematicsVelocityDamping => "sensing.kinematics.velocity.damping",
+            Field::SensingKinematicsVelocityNaturalHz => "sensing.kinematics.velocity.natural_hz",
+            Field::SensingNoiseAcceleration => "sensing.noise.acceleration",
+            Field::SensingNoiseForce => "sensing.noise.force",
+            Field::SensingNoiseVelocity => "sensing.noise.velocity",
+            Field::SensingTorqueDamping => "sensing.torque.damping",
+            Field::SensingTorqueFilter => "sensing.torque.filter",
+            Field::SensingTorqueNaturalHz => "sensing.torque.natural_hz",
+            Field::SensingTorqueNoise => "sensing.torque.noise",
+            Field::SensingTorqueOffset => "sensing.torque.offset",
+            Field::SensingTorqueRate => "sensing.torque.rate",
+        }
+    }
+}
+
+impl fmt::Display for Field {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.path())
+    }
+}
+
 /// Why a configuration does not describe a stand. Every variant names the field (a dotted path
 /// such as `motor.resistance`).
 #[derive(Clone, Debug, PartialEq)]
@@ -14,7 +191,7 @@ pub enum ConfigError {
     /// A value is outside the range it must lie in.
     OutOfRange {
         /// The field, e.g. `link.rate`.
-        field: &'static str,
+        field: Field,
         /// What the value must satisfy, e.g. `> 0 and finite`.
         requirement: &'static str,
         /// The value found.
@@ -23,7 +200,7 @@ pub enum ConfigError {
     /// Two fields contradict each other.
     Inconsistent {
         /// The fields involved.
-        fields: &'static str,
+        fields: [Field; 2],
         /// Why they do not go together.
         why: &'static str,
     },
@@ -37,19 +214,16 @@ impl fmt::Display for ConfigError {
                 requirement,
                 value,
             } => write!(f, "{field} must be {requirement} (got {value})"),
-            ConfigError::Inconsistent { fields, why } => write!(f, "{fields}: {why}"),
+            ConfigError::Inconsistent { fields, why } => {
+                write!(f, "{} and {}: {why}", fields[0], fields[1])
+            }
         }
     }
 }
 
 impl std::error::Error for ConfigError {}
 
-fn check(
-    field: &'static str,
-    value: f64,
-    requirement: &'static str,
-    ok: bool,
-) -> Result<(), ConfigError> {
+fn check(field: Field, value: f64, requirement: &'static str, ok: bool) -> Result<(), ConfigError> {
     if ok && !value.is_nan() {
         Ok(())
     } else {
@@ -61,15 +235,15 @@ fn check(
     }
 }
 
-fn positive(field: &'static str, v: f64) -> Result<(), ConfigError> {
+fn positive(field: Field, v: f64) -> Result<(), ConfigError> {
     check(field, v, "> 0 and finite", v > 0.0 && v.is_finite())
 }
 
-fn non_negative(field: &'static str, v: f64) -> Result<(), ConfigError> {
+fn non_negative(field: Field, v: f64) -> Result<(), ConfigError> {
     check(field, v, "≥ 0 and finite", v >= 0.0 && v.is_finite())
 }
 
-fn finite(field: &'static str, v: f64) -> Result<(), ConfigError> {
+fn finite(field: Field, v: f64) -> Result<(), ConfigError> {
     check(field, v, "finite", v.is_finite())
 }
 
@@ -437,51 +611,51 @@ impl MechConfig {
     /// Checks every field once.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let r = &self.rotor;
-        positive("rotor.inertia", r.inertia)?;
-        non_negative("rotor.drag.k", r.drag.k)?;
+        positive(Field::RotorInertia, r.inertia)?;
+        non_negative(Field::RotorDragK, r.drag.k)?;
         check(
-            "rotor.drag.exponent",
+            Field::RotorDragExponent,
             r.drag.exponent,
             "in [1, 4]",
             (1.0..=4.0).contains(&r.drag.exponent),
         )?;
         check(
-            "rotor.drag.cq_slope",
+            Field::RotorDragCqSlope,
             r.drag.cq_slope,
             "in (−1, 1)",
             r.drag.cq_slope.abs() < 1.0,
         )?;
-        positive("rotor.drag.cq_reference_speed", r.drag.cq_reference_speed)?;
-        non_negative("rotor.bearing.coulomb", r.bearing.coulomb)?;
-        non_negative("rotor.bearing.breakaway", r.bearing.breakaway)?;
-        positive("rotor.bearing.stribeck_speed", r.bearing.stribeck_speed)?;
-        non_negative("rotor.bearing.viscous", r.bearing.viscous)?;
-        non_negative("rotor.cogging.amplitude", r.cogging.amplitude)?;
+        positive(Field::RotorDragCqReferenceSpeed, r.drag.cq_reference_speed)?;
+        non_negative(Field::RotorBearingCoulomb, r.bearing.coulomb)?;
+        non_negative(Field::RotorBearingBreakaway, r.bearing.breakaway)?;
+        positive(Field::RotorBearingStribeckSpeed, r.bearing.stribeck_speed)?;
+        non_negative(Field::RotorBearingViscous, r.bearing.viscous)?;
+        non_negative(Field::RotorCoggingAmplitude, r.cogging.amplitude)?;
         check(
-            "rotor.cogging.harmonic",
+            Field::RotorCoggingHarmonic,
             r.cogging.harmonic,
             "a whole number ≥ 1",
             r.cogging.harmonic >= 1.0
                 && r.cogging.harmonic.fract() == 0.0
                 && r.cogging.harmonic <= 1e6,
         )?;
-        finite("rotor.cogging.phase", r.cogging.phase)?;
+        finite(Field::RotorCoggingPhase, r.cogging.phase)?;
 
         let m = &self.motor;
-        positive("motor.kt", m.kt)?;
-        positive("motor.resistance", m.resistance)?;
-        positive("motor.inductance", m.inductance)?;
+        positive(Field::MotorKt, m.kt)?;
+        positive(Field::MotorResistance, m.resistance)?;
+        positive(Field::MotorInductance, m.inductance)?;
         check(
-            "motor.supply_voltage",
+            Field::MotorSupplyVoltage,
             m.supply_voltage,
             "> 0 (infinity: no limit)",
             m.supply_voltage > 0.0,
         )?;
 
         let d = &self.drive;
-        positive("drive.max_torque", d.max_torque)?;
+        positive(Field::DriveMaxTorque, d.max_torque)?;
         check(
-            "drive.control_rate",
+            Field::DriveControlRate,
             d.control_rate,
             "in [1 kHz, 100 kHz]",
             (1e3..=1e5).contains(&d.control_rate),
@@ -491,29 +665,29 @@ impl MechConfig {
             // RK4 is accurate to well under 1 % per step for |λ·h| ≤ 0.5 (the loop's pole −ω_c),
             // and stable and within 2 % per step for the fast electrical pole −R/L at |λ·h| ≤ 1.
             check(
-                "drive.current_loop.bandwidth",
+                Field::DriveCurrentLoopBandwidth,
                 cl.bandwidth,
                 "> 0 and ≤ control_rate/2 rad/s",
                 cl.bandwidth > 0.0 && cl.bandwidth * h <= 0.5,
             )?;
             check(
-                "motor.inductance",
+                Field::MotorInductance,
                 m.inductance,
                 "≥ R/control_rate when a current loop is simulated (electrical pole too fast for the step)",
                 m.resistance * h / m.inductance <= 1.0,
             )?;
         }
         check(
-            "drive.kt_error",
+            Field::DriveKtError,
             d.kt_error,
             "in (−0.5, 1)",
             d.kt_error > -0.5 && d.kt_error < 1.0,
         )?;
         if let Some(b) = d.braking {
-            non_negative("drive.braking.torque", b.torque)?;
-            non_negative("drive.braking.off_threshold", b.off_threshold)?;
+            non_negative(Field::DriveBrakingTorque, b.torque)?;
+            non_negative(Field::DriveBrakingOffThreshold, b.off_threshold)?;
             check(
-                "drive.braking.on_threshold",
+                Field::DriveBrakingOnThreshold,
                 b.on_threshold,
                 "≥ off_threshold and finite",
                 b.on_threshold >= b.off_threshold && b.on_threshold.is_finite(),
@@ -522,7 +696,12 @@ impl MechConfig {
 
         let k = &self.sensing.kinematics;
         if let Some(n) = k.counts_per_rev {
-            check("sensing.kinematics.counts_per_rev", n as f64, "≥ 1", n >= 1)?;
+            check(
+                Field::SensingKinematicsCountsPerRev,
+                n as f64,
+                "≥ 1",
+                n >= 1,
+            )?;
         }
         if let VelocityEstimator::Pll {
             natural_hz,
@@ -530,20 +709,20 @@ impl MechConfig {
         } = k.velocity
         {
             check(
-                "sensing.kinematics.velocity.natural_hz",
+                Field::SensingKinematicsVelocityNaturalHz,
                 natural_hz,
                 "> 0 and ≤ control_rate/50",
                 natural_hz > 0.0 && natural_hz * 50.0 <= d.control_rate,
             )?;
             check(
-                "sensing.kinematics.velocity.damping",
+                Field::SensingKinematicsVelocityDamping,
                 damping,
                 "in [0.3, 3]",
                 (0.3..=3.0).contains(&damping),
             )?;
         }
         check(
-            "sensing.kinematics.acceleration_filter",
+            Field::SensingKinematicsAccelerationFilter,
             k.acceleration_filter,
             "0 or ≥ 2/control_rate",
             k.acceleration_filter == 0.0
@@ -557,13 +736,13 @@ impl MechConfig {
                 noise,
             } => {
                 check(
-                    "sensing.torque.filter",
+                    Field::SensingTorqueFilter,
                     filter,
                     "0 or ≥ 2/control_rate",
                     filter == 0.0 || (filter >= 2.0 * h && filter.is_finite()),
                 )?;
-                finite("sensing.torque.offset", offset)?;
-                non_negative("sensing.torque.noise", noise)?;
+                finite(Field::SensingTorqueOffset, offset)?;
+                non_negative(Field::SensingTorqueNoise, noise)?;
             }
             TorqueReport::LoadCell {
                 natural_hz,
@@ -573,84 +752,84 @@ impl MechConfig {
                 noise,
             } => {
                 check(
-                    "sensing.torque.natural_hz",
+                    Field::SensingTorqueNaturalHz,
                     natural_hz,
                     "> 0 and ≤ control_rate/20",
                     natural_hz > 0.0 && natural_hz * 20.0 <= d.control_rate,
                 )?;
                 check(
-                    "sensing.torque.damping",
+                    Field::SensingTorqueDamping,
                     damping,
                     "in [0.01, 3]",
                     (0.01..=3.0).contains(&damping),
                 )?;
                 check(
-                    "sensing.torque.rate",
+                    Field::SensingTorqueRate,
                     rate,
                     "> 0 and ≤ control_rate",
                     rate > 0.0 && rate <= d.control_rate,
                 )?;
-                finite("sensing.torque.offset", offset)?;
-                non_negative("sensing.torque.noise", noise)?;
+                finite(Field::SensingTorqueOffset, offset)?;
+                non_negative(Field::SensingTorqueNoise, noise)?;
             }
         }
         let n = &self.sensing.noise;
-        non_negative("sensing.noise.force", n.force)?;
-        non_negative("sensing.noise.velocity", n.velocity)?;
-        non_negative("sensing.noise.acceleration", n.acceleration)?;
+        non_negative(Field::SensingNoiseForce, n.force)?;
+        non_negative(Field::SensingNoiseVelocity, n.velocity)?;
+        non_negative(Field::SensingNoiseAcceleration, n.acceleration)?;
 
         match self.disturbance {
             Disturbance::None => {}
             Disturbance::Periodic { amplitude, hz } => {
-                finite("disturbance.amplitude", amplitude)?;
-                positive("disturbance.hz", hz)?;
+                finite(Field::DisturbanceAmplitude, amplitude)?;
+                positive(Field::DisturbanceHz, hz)?;
             }
             Disturbance::Bump {
                 amplitude,
                 start,
                 width,
             } => {
-                finite("disturbance.amplitude", amplitude)?;
-                finite("disturbance.start", start)?;
-                positive("disturbance.width", width)?;
+                finite(Field::DisturbanceAmplitude, amplitude)?;
+                finite(Field::DisturbanceStart, start)?;
+                positive(Field::DisturbanceWidth, width)?;
             }
         }
 
         let l = &self.link;
         check(
-            "link.rate",
+            Field::LinkRate,
             l.rate,
             "> 0 and ≤ control_rate/2",
             l.rate > 0.0 && l.rate * 2.0 <= d.control_rate,
         )?;
         check(
-            "link.clock.rate_error",
+            Field::LinkClockRateError,
             l.clock.rate_error,
             "in (−0.1, 0.1)",
             l.clock.rate_error.abs() < 0.1,
         )?;
         check(
-            "link.clock.drift",
+            Field::LinkClockDrift,
             l.clock.drift,
             "in (−10⁻³, 10⁻³) per second",
             l.clock.drift.abs() < 1e-3,
         )?;
-        finite("link.clock.offset", l.clock.offset)?;
+        finite(Field::LinkClockOffset, l.clock.offset)?;
         check(
-            "link.clock.stamp_jitter",
+            Field::LinkClockStampJitter,
             l.clock.stamp_jitter,
             "≥ 0 and < 0.4/rate",
             l.clock.stamp_jitter >= 0.0 && l.clock.stamp_jitter * l.rate < 0.4,
         )?;
         check(
-            "link.drop_probability",
+            Field::LinkDropProbability,
             l.drop_probability,
             "in [0, 1)",
             (0.0..1.0).contains(&l.drop_probability),
         )?;
-        non_negative("link.latency", l.latency)?;
-        non_negative("link.latency_jitter", l.latency_jitter)?;
-        finite("link.host_offset", l.host_offset)?;
+        non_negative(Field::LinkLatency, l.latency)?;
+        non_negative(Field::LinkLatencyJitter, l.latency_jitter)?;
+        finite(Field::LinkHostOffset, l.host_offset)?;
         Ok(())
     }
 }
@@ -671,13 +850,13 @@ impl Run {
     /// Checks the run.
     pub fn validate(&self) -> Result<(), ConfigError> {
         check(
-            "run.init_setpoint",
+            Field::RunInitSetpoint,
             self.init_setpoint,
             "in [−1, 1]",
             (-1.0..=1.0).contains(&self.init_setpoint),
         )?;
-        non_negative("run.init_duration", self.init_duration)?;
-        positive("run.duration", self.duration)?;
+        non_negative(Field::RunInitDuration, self.init_duration)?;
+        positive(Field::RunDuration, self.duration)?;
         Ok(())
     }
 }

@@ -61,7 +61,7 @@ pub mod stand;
 
 pub use config::{
     Bearing, Braking, Cogging, ConfigError, CurrentLoop, DeviceClock, Disturbance, Drag, Drive,
-    Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run, Sensing, TorqueReport,
+    Field, Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run, Sensing, TorqueReport,
     VelocityEstimator,
 };
 pub use record::{write_tsv, Energy, Record, Truth, TsvSink, TSV_HEADER};

@@ -2,8 +2,8 @@
 //! the seed's equation, seeds reproduce, rates and timestamps are what was asked for.
 
 use propid_mechsim::{
-    pattern, simulate, write_tsv, Braking, ConfigError, Disturbance, MechConfig, Record, Run,
-    TorqueReport, TSV_HEADER,
+    pattern, simulate, write_tsv, Braking, ConfigError, Disturbance, Field, MechConfig, Record,
+    Run, TorqueReport, TSV_HEADER,
 };
 
 fn run(duration: f64) -> Run {
@@ -193,7 +193,7 @@ fn bad_configuration_names_the_field() {
     assert!(matches!(
         e,
         ConfigError::OutOfRange {
-            field: "link.rate",
+            field: Field::LinkRate,
             ..
         }
     ));

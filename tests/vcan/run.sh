@@ -62,11 +62,17 @@ chmod +x "$root/init"
 (cd "$root" && find . | cpio -o -H newc --quiet | gzip -1) > "$work/initrd.gz"
 timeout 300 qemu-system-x86_64 -accel tcg -m 512 -kernel "$kernel" -initrd "$work/initrd.gz" \
   -append "console=ttyS0 panic=-1 quiet" -nographic -no-reboot > "$work/console.log" 2>&1 || true
-grep '^VCAN-' "$work/console.log" | tr -d '\r' | tee "$work/result.txt"
+# -o: a marker line can follow console noise on the same line (kernel messages, the shell's echo).
+tr -d '\r' < "$work/console.log" | grep -o 'VCAN-.*' | tee "$work/result.txt"
 r=$work/result.txt
 fail() { echo "vcan test FAILED: $*" >&2; exit 1; }
 grep -q VCAN-DONE "$r" || fail "the VM did not finish (console: $(tail -n 20 "$work/console.log"))"
 ! grep -q VCAN-FAIL "$r" || fail "module loading"
+# propid ran both times and completed its pattern (exit 0: STANDBY and zero confirmed sent).
+for mtu in 8 64; do
+  grep -q "VCAN-DRIVE-EXIT mtu=$mtu status=0$" "$r" ||
+    fail "propid drive (MTU $mtu) did not complete: $(grep "VCAN-DRIVE-EXIT mtu=$mtu\|VCAN-LOG" "$r")"
+done
 # propid's readiness: priority 3, subject 10, node 10, payload ENGAGED (03), single frame (tail E0|tid).
 grep -Eq 'VCAN-READINESS mtu=8 .* 0C600A0A#03E[0-9A-F]$' "$r" || fail "no Classic readiness frame from propid"
 grep -Eq 'VCAN-READINESS mtu=64 .* 0C600A0A#03E[0-9A-F]$' "$r" || fail "no readiness frame from propid (FD run)"

@@ -17,77 +17,92 @@ use anyhow::Context;
 use propid_core::dsdl::Readiness;
 use propid_transport::CanTransport;
 
-use propid_drive::drive::{run_drive, DriveConfig};
-use propid_drive::realtime::SystemClock;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
-use propid_drive::StopReason;
+use propid_drive_host::drive::run_drive;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::DriveConfig;
+use propid_drive_proto::sim_drive::SimDriveConfig;
+use propid_drive_proto::StopReason;
+
+use crate::settings::{command_args, setting, ConfigErrors, Names};
+use propid_drive_proto::excitation::Schedule;
+use propid_drive_proto::settings::{InitDuration, PatternDuration};
 use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text};
-use propid_science::excitation::{Excitation, Pattern};
+use propid_science::excitation::Pattern;
 use propid_science::fit::{figure, fit_path, to_yaml, FitOptions};
 use propid_science::stand::StandConfig;
 
-/// Arguments of `propid demo`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// Folder for the recording, the report and the plots.
-    #[arg(short, long, default_value = "propid-demo")]
-    pub out: PathBuf,
-    /// Pattern duration [s] (real time).
-    #[arg(long, default_value_t = 20.0)]
-    pub duration: f64,
-    /// Init phase at the high setpoint [s].
-    #[arg(long, default_value_t = 2.0)]
-    pub init_duration: f64,
-    /// Excitation (a chirp separates the effects better than the seed's sinusoid).
-    #[arg(long, default_value_t = Pattern::Chirp)]
-    pub pattern: Pattern,
-    /// A torque lag hidden in the simulated drive [s] (0: none), for diagnose to find.
-    #[arg(long, default_value_t = 0.012)]
-    pub torque_lag: f64,
-    /// Noise seed of the simulated stand.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
-    /// address (the URL with its per-run token is printed on stderr).
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    pub live: Option<String>,
-    /// Allow --live on an address other than loopback.
-    #[arg(long)]
-    pub live_allow_remote: bool,
+setting! {
+    /// The demo's pattern duration.
+    DemoDuration: PatternDuration = Names::flag("duration"),
+        "Pattern duration [s] (real time) [default: 20]",
+        within PatternDuration;
+    /// The demo's init phase.
+    DemoInit: InitDuration = Names::flag("init-duration"),
+        "Init phase at the high setpoint [s] [default: 2]",
+        within InitDuration;
+}
+
+command_args! {
+    /// Arguments of `propid demo`.
+    pub struct Args {
+        settings {
+            duration: DemoDuration as "S",
+            init_duration: DemoInit as "S",
+        }
+        registers {}
+        nested {}
+        /// Folder for the recording, the report and the plots.
+        #[arg(short, long, default_value = "propid-demo")]
+        pub out: PathBuf,
+        /// Excitation (a chirp separates the effects better than the seed's sinusoid).
+        #[arg(long, default_value_t = Pattern::Chirp)]
+        pub pattern: Pattern,
+        /// A torque lag hidden in the simulated drive [s] (0: none), for diagnose to find.
+        #[arg(long, default_value_t = 0.012)]
+        pub torque_lag: f64,
+        /// Noise seed of the simulated stand.
+        #[arg(long, default_value_t = 1)]
+        pub seed: u64,
+        /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
+        /// address (the URL with its per-run token is printed on stderr).
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+        pub live: Option<String>,
+        /// Allow --live on an address other than loopback.
+        #[arg(long)]
+        pub live_allow_remote: bool,
+    }
 }
 
 /// Runs `propid demo`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let mut errors = ConfigErrors::default();
+    let duration = errors.or(args.duration, PatternDuration::from_const(20.0));
+    let init_duration = errors.or(args.init_duration, InitDuration::from_const(2.0));
+    let (Some(duration), Some(init_duration), Ok(())) =
+        (duration, init_duration, errors.clone().check())
+    else {
+        return Err(errors.into());
+    };
     let stand = StandConfig {
         torque_lag: args.torque_lag,
         ..StandConfig::default()
     };
     stand.validate()?;
-    let excitation = Excitation {
-        lo: 0.1,
-        hi: 0.9,
-        period: 2.0,
-        duration: args.duration,
-        init_duration: args.init_duration,
-        pattern: args.pattern,
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    let schedule = Schedule {
+        duration,
+        init_duration,
+        ..Schedule::SEED
     };
+    let played = Played::new(schedule, args.pattern);
+    let excitation = *played.excitation();
     let cfg = DriveConfig {
         fit: true,
-        ..DriveConfig::example(excitation)
+        ..DriveConfig::example(played)
     };
-    cfg.validate().map_err(|e| {
-        // The demo's own flags: --duration and --init-duration.
-        let e = crate::cmd::drive::flag_error(e);
-        crate::InputError(
-            e.0.replace(
-                "--pattern-duration (register pattern_duration, PATTERN_DURATION)",
-                "--duration",
-            )
-            .replace(" (register init_duration, INIT_DURATION)", ""),
-        )
-    })?;
     let (mut transport, mut telega_end, pty) = link()?;
     eprintln!(
         "demo: simulated Telega (J = {:.2e} kg·m², c2 = {:.2e}, hidden torque lag {} ms) and the driver talk SLCAN over {pty}",
@@ -95,23 +110,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand.c2,
         stand.torque_lag * 1e3
     );
-    let sim_cfg = SimDriveConfig::example(stand, args.seed);
+    let plant = StandPlant::boxed(stand, args.seed)?;
     let stop_sim = Arc::new(AtomicBool::new(false));
     let telega = {
         let stop = Arc::clone(&stop_sim);
-        std::thread::spawn(move || run_sim_drive(sim_cfg, telega_end.as_mut(), &SystemClock, &stop))
+        let cfg = SimDriveConfig::example();
+        std::thread::spawn(move || {
+            run_sim_drive(cfg, plant, telega_end.as_mut(), &SystemClock, &stop)
+        })
     };
     let tsv = args.out.join("run.tsv");
     let mut file =
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
     // Ctrl-C, or STOP on the live page, stops the drive with STANDBY as always.
     let stop = Arc::new(AtomicBool::new(false));
-    crate::signals::install(&stop)?;
+    let _handlers = crate::signals::install(&stop)?;
     let mut live = crate::live::start_for_drive(
         args.live.as_deref(),
         args.live_allow_remote,
         &stop,
-        excitation,
+        played,
         "propid demo",
     )?;
     let outcome = run_drive(
@@ -180,7 +198,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand.inertia,
         stand.c2,
         stand.torque_lag * 1e3,
-        args.duration,
+        duration,
         args.pattern,
         outcome.report.rows,
         if standby_last { "the simulated drive saw STANDBY last" } else { "the simulated drive did NOT see STANDBY last" }
@@ -194,8 +212,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let reproduce = [format!(
         "propid demo --out {} --duration {} --init-duration {} --pattern {} --torque-lag {} --seed {}",
         args.out.display(),
-        args.duration,
-        args.init_duration,
+        duration,
+        init_duration,
         args.pattern,
         args.torque_lag,
         args.seed

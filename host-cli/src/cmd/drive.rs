@@ -1,5 +1,5 @@
-//! `propid drive`: argument parsing, the signal handlers, progress lines and exit codes around
-//! [`propid_drive::drive::run_drive`].
+//! `propid drive`: the seed's settings checked (flags, environment, register file), the signal
+//! handlers, progress lines and exit codes around [`propid_drive_host::drive::run_drive`].
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -9,272 +9,375 @@ use std::sync::Arc;
 use anyhow::Context;
 use propid_core::can::{NodeId, SubjectId};
 use propid_core::dsdl::Value;
-use propid_drive::drive::{
-    run_drive_machine, ConfigError, Drive, DriveConfig, DriveEvent, Progress,
+use propid_drive_host::drive::run_drive_machine;
+use propid_drive_host::realtime::{Clock, SystemClock};
+use propid_drive_host::register_file::render_file;
+use propid_drive_host::stand::Played;
+use propid_drive_proto::drive::{drive_registers, Drive, DriveConfig, DriveEvent, Progress};
+use propid_drive_proto::excitation::Schedule;
+use propid_drive_proto::registers::{self, NODE_DESCRIPTION};
+use propid_drive_proto::settings::{
+    Deadman, InitDuration, PatternDuration, Period, Range, RangeError, RelativeError,
+    SetpointPeriod, SetpointRange,
 };
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers::{self, HostRegistry};
-use propid_drive::StopReason;
+use propid_drive_proto::{HostRegistry, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
+use crate::bus::{Bus, BusArgs};
+use crate::settings::{
+    checked, command_args, environment, fill, setpoint_range, setting, ConfigError, ConfigErrors,
+    Names, Problem, RegisterFile,
+};
 use crate::InputError;
 
-/// Arguments of `propid drive`. The seed's settings are registers (docs/REGISTERS.md): each
-/// comes from its default, then the `--registers` file, then its environment variable (the
-/// register's name as PyCyphal maps it, e.g. `SETPOINT_RAT_LO_HI`, `UAVCAN__NODE__ID`), then the
-/// flag; the node serves them over uavcan.register.List/Access while it drives.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// This node's ID (register uavcan.node.id, UAVCAN__NODE__ID).
-    #[arg(long)]
-    pub node_id: Option<NodeId>,
-    /// The bus.
-    #[command(flatten)]
-    pub bus: crate::bus::BusArgs,
-    /// A register file: `name: value` lines (values as the environment variables take them),
-    /// read before the environment and the flags; registers written over the bus are saved to it.
-    #[arg(long, value_name = "FILE")]
-    pub registers: Option<PathBuf>,
-    /// Take the port-IDs from the drive's own registers (uavcan.pub.dynamics.id,
-    /// uavcan.sub.setpoint_r_torq.id, uavcan.sub.readiness.id) and refuse to engage it when its
-    /// configuration would spoil the data (see `propid telega`).
-    #[arg(long, value_name = "NODE")]
-    pub from_telega: Option<NodeId>,
-    /// Print the registers (defaults, file, environment and flags applied and checked) in the
-    /// register file's format, and exit without opening the bus.
-    #[arg(long)]
-    pub show_registers: bool,
-    /// Subject-ID of the readiness publisher; no readiness is published when unset
-    /// (uavcan.pub.readiness.id, UAVCAN__PUB__READINESS__ID).
-    #[arg(long)]
-    pub readiness_id: Option<SubjectId>,
-    /// Subject-ID of the ratiometric setpoint publisher (uavcan.pub.sp_rat.id,
-    /// UAVCAN__PUB__SP_RAT__ID).
-    #[arg(long)]
-    pub setpoint_id: Option<SubjectId>,
-    /// Subject-ID of the dynamics feedback subscriber (uavcan.sub.fb_dyn.id,
-    /// UAVCAN__SUB__FB_DYN__ID).
-    #[arg(long)]
-    pub feedback_id: Option<SubjectId>,
-    /// Setpoint range "LO HI", ratiometric in [-1, 1] (register setpoint_rat_lo_hi,
-    /// SETPOINT_RAT_LO_HI; default "0.1 0.9").
-    #[arg(long)]
-    pub setpoint_rat_lo_hi: Option<String>,
-    /// Period of the sinusoid [s] (register period, PERIOD; default 2).
-    #[arg(long)]
-    pub period: Option<f64>,
-    /// Duration of the pattern [s] (register pattern_duration, PATTERN_DURATION; default 200).
-    #[arg(long)]
-    pub pattern_duration: Option<f64>,
-    /// Duration of the initial run at the high setpoint [s] (register init_duration,
-    /// INIT_DURATION; default 5).
-    #[arg(long)]
-    pub init_duration: Option<f64>,
-    /// Setpoint publication period [s] (register setpoint_period, SETPOINT_PERIOD; default
-    /// 0.005).
-    #[arg(long)]
-    pub setpoint_period: Option<f64>,
-    /// Pattern after the init phase (the seed: sine).
-    #[arg(long, default_value_t = Pattern::Sine)]
-    pub pattern: Pattern,
-    /// Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s].
-    #[arg(long, default_value_t = 0.5)]
-    pub deadman: f64,
-    /// Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of
-    /// the first feedback message).
-    #[arg(long)]
-    pub drive_node_id: Option<NodeId>,
-    /// Print the running estimate of J, c1, c2 on stderr while driving.
-    #[arg(long)]
-    pub fit: bool,
-    /// Write the TSV here instead of standard output.
-    #[arg(short, long)]
-    pub output: Option<PathBuf>,
-    /// Progress on stderr once a second.
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
-    pub progress: bool,
-    /// Play a pattern file from `propid plan` (its range, period and duration) instead of
-    /// --pattern, --period and the setpoint range.
-    #[arg(long)]
-    pub pattern_file: Option<PathBuf>,
-    /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
-    /// most this many percent; the pattern duration is then the longest the run may take.
-    #[arg(long, value_name = "PCT")]
-    pub until_stderr: Option<f64>,
-    /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on this
-    /// address (loopback; the URL with its per-run token is printed on stderr).
-    #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
-    pub live: Option<String>,
-    /// Allow --live on an address other than loopback (anyone who can reach it and has the token
-    /// can stop the drive).
-    #[arg(long)]
-    pub live_allow_remote: bool,
+setting! {
+    /// This node's ID.
+    NodeIdSetting: Option<NodeId> =
+        Names::register("node-id", registers::NODE_ID, "UAVCAN__NODE__ID"),
+        "This node's ID",
+        crate::settings::node_id;
+    /// This node's description (register and environment only).
+    Description: String = Names {
+        flag: None,
+        register: Some(NODE_DESCRIPTION),
+        env: Some("UAVCAN__NODE__DESCRIPTION"),
+    },
+        "This node's description",
+        |text: &str| Ok(text.to_string());
+    /// The readiness publisher's subject.
+    ReadinessId: Option<SubjectId> =
+        Names::register("readiness-id", registers::DRIVE_READINESS_ID, "UAVCAN__PUB__READINESS__ID"),
+        "Subject-ID of the readiness publisher; none is published when unset",
+        crate::settings::subject_id;
+    /// The setpoint publisher's subject.
+    SetpointId: Option<SubjectId> =
+        Names::register("setpoint-id", registers::DRIVE_SETPOINT_ID, "UAVCAN__PUB__SP_RAT__ID"),
+        "Subject-ID of the ratiometric setpoint publisher",
+        crate::settings::subject_id;
+    /// The feedback subscriber's subject.
+    FeedbackId: Option<SubjectId> =
+        Names::register("feedback-id", registers::DRIVE_FEEDBACK_ID, "UAVCAN__SUB__FB_DYN__ID"),
+        "Subject-ID of the dynamics feedback subscriber",
+        crate::settings::subject_id;
+    /// The setpoint range.
+    LoHi: SetpointRange =
+        Names::register("setpoint-rat-lo-hi", registers::SETPOINT_RAT_LO_HI, "SETPOINT_RAT_LO_HI"),
+        "Setpoint range \"LO HI\", ratiometric, -1 ≤ LO < HI ≤ 1 [default: 0.1 0.9]",
+        setpoint_range;
+    /// The pattern's period.
+    PeriodSetting: Period = Names::register("period", registers::PERIOD, "PERIOD"),
+        "Period of the sinusoid [s] [default: 2]",
+        within Period;
+    /// The pattern's duration.
+    PatternDurationSetting: PatternDuration =
+        Names::register("pattern-duration", registers::PATTERN_DURATION, "PATTERN_DURATION"),
+        "Duration of the pattern [s] [default: 200]",
+        within PatternDuration;
+    /// The init phase's duration.
+    InitDurationSetting: InitDuration =
+        Names::register("init-duration", registers::INIT_DURATION, "INIT_DURATION"),
+        "Duration of the initial run at the high setpoint [s] [default: 5]",
+        within InitDuration;
+    /// The setpoint publication period.
+    SetpointPeriodSetting: SetpointPeriod =
+        Names::register("setpoint-period", registers::SETPOINT_PERIOD, "SETPOINT_PERIOD"),
+        "Setpoint publication period [s] [default: 0.005]",
+        within SetpointPeriod;
+    /// The deadman timeout.
+    DeadmanSetting: Deadman = Names::flag("deadman"),
+        "Stop (commanding STANDBY) when no feedback arrives for this long during the pattern [s] [default: 0.5]",
+        within Deadman;
+    /// The drive whose heartbeat is watched.
+    DriveNodeId: NodeId = Names::flag("drive-node-id"),
+        "Node-ID of the drive, whose heartbeat is watched for a reboot (default: the publisher of the first feedback message)",
+        |text: &str| text.parse::<NodeId>().map_err(Problem::Id);
+    /// The precision to stop at.
+    UntilStderr: RelativeError = Names::flag("until-stderr"),
+        "Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at most this many percent; the pattern duration is then the longest the run may take",
+        |text: &str| {
+            let percent = Range { lo: 0.0, lo_open: true, hi: 100.0, hi_open: true, unit: "%" };
+            let p = crate::settings::seconds_in(text, percent)?;
+            RelativeError::new(p / 100.0).map_err(|_| Problem::Range(RangeError { range: percent, got: p }))
+        };
 }
 
-fn n16(v: u16) -> Value {
-    Value::natural16(&[v]).unwrap_or_default()
+command_args! {
+    /// Arguments of `propid drive`. The seed's settings are registers (docs/REGISTERS.md): each
+    /// comes from its default, then the `--registers` file, then its environment variable (the
+    /// register's name as PyCyphal maps it, e.g. `SETPOINT_RAT_LO_HI`, `UAVCAN__NODE__ID`), then
+    /// the flag; the node serves them over uavcan.register.List/Access while it drives.
+    pub struct Args {
+        settings {
+            node_id: NodeIdSetting as "ID",
+            readiness_id: ReadinessId as "ID",
+            setpoint_id: SetpointId as "ID",
+            feedback_id: FeedbackId as "ID",
+            setpoint_rat_lo_hi: LoHi as "LO HI",
+            period: PeriodSetting as "S",
+            pattern_duration: PatternDurationSetting as "S",
+            init_duration: InitDurationSetting as "S",
+            setpoint_period: SetpointPeriodSetting as "S",
+            deadman: DeadmanSetting as "S",
+            drive_node_id: DriveNodeId as "ID",
+            until_stderr: UntilStderr as "PCT",
+        }
+        registers {
+            description: Description,
+        }
+        nested {
+            bus: BusArgs,
+        }
+        /// A register file: `name: value` lines (values as the environment variables take them),
+        /// read before the environment and the flags; registers written over the bus are saved
+        /// to it.
+        #[arg(long, value_name = "FILE")]
+        pub registers: Option<PathBuf>,
+        /// Take the port-IDs from the drive's own registers (uavcan.pub.dynamics.id,
+        /// uavcan.sub.setpoint_r_torq.id, uavcan.sub.readiness.id) and refuse to engage it when
+        /// its configuration would spoil the data (see `propid telega`).
+        #[arg(long, value_name = "NODE")]
+        pub from_telega: Option<NodeId>,
+        /// Print the registers (defaults, file, environment and flags applied and checked) in the
+        /// register file's format, and exit without opening the bus.
+        #[arg(long)]
+        pub show_registers: bool,
+        /// Pattern after the init phase (the seed: sine).
+        #[arg(long, default_value_t = Pattern::Sine)]
+        pub pattern: Pattern,
+        /// Print the running estimate of J, c1, c2 on stderr while driving.
+        #[arg(long)]
+        pub fit: bool,
+        /// Write the TSV here instead of standard output.
+        #[arg(short, long)]
+        pub output: Option<PathBuf>,
+        /// Progress on stderr once a second.
+        #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+        pub progress: bool,
+        /// Play a pattern file from `propid plan` (its range, period and duration) instead of
+        /// --pattern, --period and the setpoint range.
+        #[arg(long)]
+        pub pattern_file: Option<PathBuf>,
+        /// Serve a live page of the run (plots, running estimate, bus health, a STOP button) on
+        /// this address (loopback; the URL with its per-run token is printed on stderr).
+        #[arg(long, value_name = "ADDR", num_args = 0..=1, default_missing_value = "127.0.0.1:8080")]
+        pub live: Option<String>,
+        /// Allow --live on an address other than loopback (anyone who can reach it and has the
+        /// token can stop the drive).
+        #[arg(long)]
+        pub live_allow_remote: bool,
+    }
 }
 
-fn r64(v: f64) -> Value {
-    Value::real64(&[v]).unwrap_or_default()
+/// `propid drive`'s arguments with the environment and the register file filled in, and what
+/// was wrong on the way (a register file that cannot be read, lines that are not registers).
+pub struct Raw {
+    /// The arguments.
+    pub args: Args,
+    /// Errors so far.
+    pub errors: ConfigErrors,
 }
 
 impl Args {
-    /// The registers: defaults, then the register file, then the environment (`vars`), then
-    /// the flags. A value that does not parse is refused naming its origin and register.
-    pub fn registers(
-        &self,
-        vars: impl IntoIterator<Item = (String, String)>,
-    ) -> Result<HostRegistry, InputError> {
-        let mut r = registers::drive_defaults(self.registers.is_some());
-        if let Some(path) = &self.registers {
-            let text = std::fs::read_to_string(path).map_err(|e| {
-                InputError(format!(
-                    "cannot read the register file {}: {e}",
-                    path.display()
-                ))
-            })?;
-            registers::apply_file(&mut r, path, &text).map_err(|e| InputError(e.0))?;
-        }
-        registers::apply_environment(&mut r, vars).map_err(|e| InputError(e.0))?;
-        let mut set = |name: &str, v: Option<Value>| {
-            if let Some(v) = v {
-                // The flags are typed: the conversion to the register's type cannot fail.
-                let _ = r.set(name, &v);
-            }
-        };
-        set(
-            "uavcan.node.id",
-            self.node_id.map(|id| n16(u16::from(id.get()))),
-        );
-        set(
-            registers::DRIVE_READINESS_ID,
-            self.readiness_id.map(|id| n16(id.get())),
-        );
-        set(
-            registers::DRIVE_SETPOINT_ID,
-            self.setpoint_id.map(|id| n16(id.get())),
-        );
-        set(
-            registers::DRIVE_FEEDBACK_ID,
-            self.feedback_id.map(|id| n16(id.get())),
-        );
-        set("period", self.period.map(r64));
-        set("pattern_duration", self.pattern_duration.map(r64));
-        set("init_duration", self.init_duration.map(r64));
-        set("setpoint_period", self.setpoint_period.map(r64));
-        if let Some(text) = &self.setpoint_rat_lo_hi {
-            let (lo, hi) = parse_lo_hi(text)?;
-            set("setpoint_rat_lo_hi", Value::real64(&[lo, hi]));
-        }
-        Ok(r)
+    /// These arguments with the environment (`vars`) and the register file filled in.
+    pub fn raw(mut self, vars: &std::collections::HashMap<String, String>) -> Raw {
+        let mut errors = ConfigErrors::default();
+        let file = self
+            .registers
+            .as_deref()
+            .and_then(|p| RegisterFile::read(p, &mut errors));
+        // Served but not settings: the ports' `.type` registers.
+        let defaults = registers::drive_defaults(false);
+        let read_only: Vec<&str> = defaults
+            .iter()
+            .filter(|r| !r.mutable)
+            .filter_map(|r| r.name.as_str())
+            .collect();
+        fill(&mut self, vars, file.as_ref(), &read_only, &mut errors);
+        Raw { args: self, errors }
     }
 
-    /// The validated configuration these arguments, the register file and the environment
-    /// (`vars`) describe, and the registers the drive will serve.
-    pub fn config_with(
-        &self,
-        vars: impl IntoIterator<Item = (String, String)>,
-    ) -> Result<(DriveConfig, HostRegistry), InputError> {
-        let r = self.registers(vars)?;
-        let until_rel_stderr = match self.until_stderr {
-            Some(p) if p > 0.0 && p < 100.0 => Some(p / 100.0),
-            Some(p) => {
-                return Err(InputError(format!(
-                    "--until-stderr must be a percentage in (0, 100) (got {p})"
-                )))
-            }
-            None => None,
+    /// The checked settings of these arguments, the process's environment and the register file.
+    pub fn settings(self) -> Result<Settings, ConfigErrors> {
+        Settings::try_from(self.raw(&environment()))
+    }
+}
+
+/// `propid drive`'s settings, checked: nothing here can be out of range.
+#[derive(Clone, Debug)]
+pub struct Settings {
+    /// The bus.
+    pub bus: Bus,
+    /// This node's ID.
+    pub node_id: NodeId,
+    /// Its description.
+    pub description: String,
+    /// The register file, if any (written registers are saved to it).
+    pub registers: Option<PathBuf>,
+    /// Read the port-IDs from this drive.
+    pub from_telega: Option<NodeId>,
+    /// Print the registers and exit.
+    pub show_registers: bool,
+    /// Readiness subject.
+    pub readiness_id: Option<SubjectId>,
+    /// Setpoint subject (`None` only with `from_telega`: the drive's).
+    pub setpoint_id: Option<SubjectId>,
+    /// Feedback subject (`None` only with `from_telega`: the drive's).
+    pub feedback_id: Option<SubjectId>,
+    /// What to play.
+    pub played: Played,
+    /// Setpoint period.
+    pub setpoint_period: SetpointPeriod,
+    /// Deadman timeout.
+    pub deadman: Deadman,
+    /// The drive whose heartbeat is watched.
+    pub drive_node_id: Option<NodeId>,
+    /// Print the running estimate.
+    pub fit: bool,
+    /// Where the TSV goes (`None`: standard output).
+    pub output: Option<PathBuf>,
+    /// Progress lines.
+    pub progress: bool,
+    /// Stop once this precise.
+    pub until: Option<RelativeError>,
+    /// Serve the live page here.
+    pub live: Option<String>,
+    /// Even on a non-loopback address.
+    pub live_allow_remote: bool,
+}
+
+impl TryFrom<Raw> for Settings {
+    type Error = ConfigErrors;
+
+    /// Checks every setting and reports every error at once.
+    fn try_from(raw: Raw) -> Result<Settings, ConfigErrors> {
+        let Raw { args, mut errors } = raw;
+        // Every field named: a setting added to Args and not checked here does not compile.
+        let Args {
+            node_id,
+            description,
+            bus,
+            registers,
+            from_telega,
+            show_registers,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            setpoint_rat_lo_hi,
+            period,
+            pattern_duration,
+            init_duration,
+            setpoint_period,
+            pattern,
+            deadman,
+            drive_node_id,
+            fit,
+            output,
+            progress,
+            pattern_file,
+            until_stderr,
+            live,
+            live_allow_remote,
+        } = args;
+        let e = &mut errors;
+        let seed = Schedule::SEED;
+        let node_id = e.required_id(node_id);
+        let description = e.or(description, String::new());
+        let bus = Bus::check(bus, e);
+        let readiness_id = e.or(readiness_id, None);
+        // With --from-telega the drive's own registers give the ports the settings leave out.
+        let (setpoint_id, feedback_id) = match from_telega {
+            Some(_) => (e.or(setpoint_id, None), e.or(feedback_id, None)),
+            None => (
+                e.required_id(setpoint_id).map(Some),
+                e.required_id(feedback_id).map(Some),
+            ),
         };
-        let mut cfg = DriveConfig::example(Excitation {
-            lo: 0.1,
-            hi: 0.9,
-            period: 2.0,
-            duration: 200.0,
-            init_duration: 5.0,
-            pattern: self.pattern,
+        let range = e.or(setpoint_rat_lo_hi, seed.range);
+        let period = e.or(period, seed.period);
+        let duration = e.or(pattern_duration, seed.duration);
+        let init_duration = e.or(init_duration, seed.init_duration);
+        let setpoint_period = e.or(setpoint_period, SetpointPeriod::SEED);
+        let deadman = e.or(deadman, Deadman::DEFAULT);
+        let drive_node_id = e.given(drive_node_id);
+        let until = e.given(until_stderr);
+        let from_file = pattern_file.map(|path| {
+            crate::cmd::sim::read_pattern_file(&path)
+                .map_err(|e| e.0)
+                .and_then(|x| Played::try_from(x).map_err(|e| format!("{}: {e}", path.display())))
         });
-        cfg.mtu = self.bus.mtu;
-        cfg.deadman = self.deadman;
-        cfg.drive_node_id = self.drive_node_id;
-        cfg.fit = self.fit || until_rel_stderr.is_some();
-        cfg.until_rel_stderr = until_rel_stderr;
-        let mut with_ids = r.clone();
-        if self.from_telega.is_some() {
-            // The port-IDs come from the drive later: check everything else now, before anything
-            // is sent.
-            for name in [registers::DRIVE_SETPOINT_ID, registers::DRIVE_FEEDBACK_ID] {
-                if with_ids.get(name).and_then(|x| x.value.float_at(0))
-                    == Some(f64::from(registers::UNSET))
-                {
-                    let _ = with_ids.set(name, &n16(0));
-                }
+        let from_file = match from_file {
+            Some(Err(why)) => {
+                e.push(ConfigError::Flag {
+                    flag: "pattern-file",
+                    why,
+                });
+                None
             }
-        }
-        registers::apply_drive_registers(&with_ids, &mut cfg).map_err(flag_error)?;
-        if let Some(path) = &self.pattern_file {
-            cfg.excitation = crate::cmd::sim::read_pattern_file(path)?;
-        }
-        cfg.validate().map_err(flag_error)?;
-        Ok((cfg, r))
-    }
-
-    /// [`Args::config_with`] the process's environment.
-    pub fn config(&self) -> Result<(DriveConfig, HostRegistry), InputError> {
-        self.config_with(std::env::vars())
-    }
-}
-
-/// A configuration error in the words of the command line: the flag, the register and its
-/// environment variable, and what is wrong.
-pub fn flag_error(e: ConfigError) -> InputError {
-    let (flag, register) = match e.setting {
-        "node_id" | "uavcan.node.id" => ("--node-id", Some("uavcan.node.id")),
-        "setpoint_id" | registers::DRIVE_SETPOINT_ID => {
-            ("--setpoint-id", Some(registers::DRIVE_SETPOINT_ID))
-        }
-        "feedback_id" | registers::DRIVE_FEEDBACK_ID => {
-            ("--feedback-id", Some(registers::DRIVE_FEEDBACK_ID))
-        }
-        "readiness_id" | registers::DRIVE_READINESS_ID => {
-            ("--readiness-id", Some(registers::DRIVE_READINESS_ID))
-        }
-        "setpoint_lo" | "setpoint_hi" | "setpoint_rat_lo_hi" => {
-            ("--setpoint-rat-lo-hi", Some("setpoint_rat_lo_hi"))
-        }
-        "period" => ("--period", Some("period")),
-        "pattern_duration" => ("--pattern-duration", Some("pattern_duration")),
-        "init_duration" => ("--init-duration", Some("init_duration")),
-        "setpoint_period" => ("--setpoint-period", Some("setpoint_period")),
-        "deadman" => ("--deadman", None),
-        "drive_node_id" => ("--drive-node-id", None),
-        "mtu" => ("--mtu", None),
-        "interval" => ("--interval", None),
-        "duration" => ("--duration", None),
-        other => return InputError(format!("{other}: {}", e.problem)),
-    };
-    match register {
-        Some(reg) => InputError(format!(
-            "{flag} (register {reg}, {}) {}",
-            registers::environment_name(reg),
-            e.problem
-        )),
-        None => InputError(format!("{flag} {}", e.problem)),
+            Some(Ok(played)) => Some(Some(played)),
+            None => Some(None),
+        };
+        checked!(
+            errors;
+            node_id, description, bus, readiness_id, setpoint_id, feedback_id, range, period,
+            duration, init_duration, setpoint_period, deadman, drive_node_id, until, from_file,
+        );
+        let played = from_file.unwrap_or_else(|| {
+            let schedule = Schedule {
+                range,
+                period,
+                duration,
+                init_duration,
+            };
+            Played::new(schedule, pattern)
+        });
+        Ok(Settings {
+            bus,
+            node_id,
+            description,
+            registers,
+            from_telega,
+            show_registers,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            played,
+            setpoint_period,
+            deadman,
+            drive_node_id,
+            fit: fit || until.is_some(),
+            output,
+            progress,
+            until,
+            live,
+            live_allow_remote,
+        })
     }
 }
 
-/// Parses the seed's `setpoint_rat_lo_hi` register: two numbers, space or comma separated.
-pub fn parse_lo_hi(text: &str) -> Result<(f64, f64), InputError> {
-    let bad = || InputError(format!("setpoint_rat_lo_hi `{text}` is not two numbers"));
-    let values: Vec<f64> = text
-        .split(|c: char| c.is_whitespace() || c == ',')
-        .filter(|s| !s.is_empty())
-        .map(|s| s.parse::<f64>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| bad())?;
-    match values[..] {
-        [lo, hi] => Ok((lo, hi)),
-        _ => Err(bad()),
+impl Settings {
+    /// The driver's configuration (ports the drive was to give are 0 until it has).
+    pub fn drive_config(&self) -> DriveConfig {
+        DriveConfig {
+            node_id: self.node_id,
+            mtu: self.bus.mtu,
+            readiness_id: self.readiness_id,
+            setpoint_id: self.setpoint_id.unwrap_or(SubjectId::from_const(0)),
+            feedback_id: self.feedback_id.unwrap_or(SubjectId::from_const(0)),
+            drive_node_id: self.drive_node_id,
+            excitation: Arc::new(self.played),
+            setpoint_period: self.setpoint_period,
+            deadman: self.deadman,
+            fit: self.fit,
+            until_rel_stderr: self.until,
+        }
+    }
+
+    /// The registers the drive serves: `cfg`'s values and the description.
+    pub fn served(&self, cfg: &DriveConfig) -> HostRegistry {
+        let mut served = drive_registers(cfg, self.registers.is_some());
+        let description = registers::text(&self.description);
+        let _ = served.set(NODE_DESCRIPTION, &description);
+        served
     }
 }
 
@@ -327,7 +430,7 @@ fn save_written(
         return;
     };
     let _ = regs.set(name, value);
-    match std::fs::write(path, registers::render_file(regs)) {
+    match std::fs::write(path, render_file(regs)) {
         Ok(()) => eprintln!(
             "drive: register {name} written over the bus: {shown}, saved to {} for the next run",
             path.display()
@@ -341,37 +444,38 @@ fn save_written(
 
 /// Runs `propid drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let (mut cfg, mut file_registers) = args.config()?;
-    if args.show_registers {
-        print!("{}", registers::render_file(&file_registers));
+    let s = args.settings()?;
+    let mut cfg = s.drive_config();
+    if s.show_registers {
+        print!("{}", render_file(&s.served(&cfg)));
         return Ok(());
     }
-    let mut transport = args.bus.open()?;
-    if let Some(node) = args.from_telega {
+    let mut transport = s.bus.open()?;
+    if let Some(node) = s.from_telega {
         let ports =
             crate::cmd::telega::drive_ports(transport.as_mut(), cfg.node_id, cfg.mtu, node)?;
-        let pick = |flag: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
-            match (flag, theirs) {
+        let pick = |ours: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
+            match (ours, theirs) {
                 (Some(f), Some(t)) if f != t => Err(InputError(format!(
-                    "--{name} {f} but drive {node} has {reg} = {t}; drop the flag or change the register with propid telega"
+                    "--{name} {f} but drive {node} has {reg} = {t}; drop the setting or change the register with propid telega"
                 ))),
                 (_, t) => Ok(t),
             }
         };
         let feedback = pick(
-            args.feedback_id,
+            s.feedback_id,
             ports.feedback,
             "feedback-id",
             registers::TELEGA_FEEDBACK_ID,
         )?;
         let setpoint = pick(
-            args.setpoint_id,
+            s.setpoint_id,
             ports.setpoint,
             "setpoint-id",
             registers::TELEGA_SETPOINT_ID,
         )?;
         let readiness = pick(
-            args.readiness_id,
+            s.readiness_id,
             ports.readiness,
             "readiness-id",
             registers::TELEGA_READINESS_ID,
@@ -397,35 +501,26 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             cfg.readiness_id.map_or("none".into(), |r| r.to_string())
         );
     }
-    // What the node serves: the run's values, and the text registers as given.
-    let mut served = registers::drive_registers(&cfg, args.registers.is_some());
-    if let Some(d) = file_registers.get("uavcan.node.description") {
-        let _ = served.set("uavcan.node.description", &d.value.clone());
-    }
-    let register_file = args.registers.clone();
+    // What the node serves (and saves to the register file): the run's values.
+    let mut served = s.served(&cfg);
     let stop = Arc::new(AtomicBool::new(false));
-    crate::signals::install(&stop)?;
-    let mut out: Box<dyn Write> = match &args.output {
+    let _handlers = crate::signals::install(&stop)?;
+    let mut out: Box<dyn Write> = match &s.output {
         Some(p) => Box::new(
             std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
         ),
         None => Box::new(std::io::stdout()),
     };
-    let excitation = cfg.excitation;
+    let excitation = *s.played.excitation();
     let readiness = cfg.readiness_id.is_some();
-    let fit = cfg.fit;
     let mut live = crate::live::start_for_drive(
-        args.live.as_deref(),
-        args.live_allow_remote,
+        s.live.as_deref(),
+        s.live_allow_remote,
         &stop,
-        excitation,
+        s.played,
         "propid drive",
     )?;
-    let drive = Drive::with_registers(
-        cfg,
-        &served,
-        propid_drive::realtime::Clock::now(&SystemClock),
-    );
+    let drive = Drive::with_registers(cfg, &served.clone(), SystemClock.now());
     let outcome = run_drive_machine(
         drive,
         transport.as_mut(),
@@ -434,9 +529,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         &mut out,
         &mut |e| {
             if let DriveEvent::RegisterWritten { name, value } = e {
-                save_written(register_file.as_deref(), &mut file_registers, name, value);
+                save_written(s.registers.as_deref(), &mut served, name, value);
             }
-            print_event(e, &excitation, args.progress);
+            print_event(e, &excitation, s.progress);
             if let Some((_, view)) = live.as_mut() {
                 view.on_event(e);
             }
@@ -468,7 +563,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "drive: stopped ({}); {delivered}; {} rows written; frames dropped {} (link busy {} times, {} setpoints superseded, {} refused by a full queue)",
         r.reason, r.rows, r.tx.dropped, r.tx.would_block, r.tx.superseded, r.tx.refused
     );
-    if let Some(e) = r.estimate.filter(|_| fit) {
+    if let Some(e) = r.estimate.filter(|_| s.fit) {
         eprintln!(
             "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
             e.j, e.j_stderr, e.c1, e.c2, e.c2_stderr
@@ -481,7 +576,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Ok(())
         }
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
-        StopReason::Signal => std::process::exit(130),
+        StopReason::Signal => Err(crate::Interrupted.into()),
         reason => anyhow::bail!("{reason}"),
     }
 }

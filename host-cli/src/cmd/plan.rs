@@ -5,41 +5,47 @@ use std::path::PathBuf;
 use anyhow::Context;
 use propid_science::plan::{design, to_file, Constraints, Plan, Prior};
 
+use crate::cmd::drive::LoHi;
+use crate::settings::{command_args, environment, fill, ConfigErrors};
 use crate::InputError;
+use propid_drive_proto::settings::SetpointRange;
 
-/// Arguments of `propid plan`.
-#[derive(clap::Args, Debug)]
-pub struct Args {
-    /// A fit from an earlier run (`propid fit` YAML): its mass and c2 are the prior.
-    #[arg(long)]
-    pub fit: Option<PathBuf>,
-    /// Prior inertia J [kg·m²] (instead of --fit).
-    #[arg(long)]
-    pub inertia: Option<f64>,
-    /// Prior drag c2 [N·m·s²/rad²] (instead of --fit).
-    #[arg(long)]
-    pub c2: Option<f64>,
-    /// The drive's torque at setpoint 1 [N·m].
-    #[arg(long)]
-    pub max_torque: f64,
-    /// Setpoint range "LO HI", as the seed's register setpoint_rat_lo_hi.
-    #[arg(long, env = "SETPOINT_RAT_LO_HI", default_value = "0.1 0.9")]
-    pub setpoint_rat_lo_hi: String,
-    /// Largest speed the stand may reach [rad/s].
-    #[arg(long)]
-    pub max_speed: Option<f64>,
-    /// Longest pattern [s] (the seed's pattern_duration).
-    #[arg(long, default_value_t = 200.0)]
-    pub duration: f64,
-    /// Plan for this relative standard error of J and c2 [%] instead of the seed's precision.
-    #[arg(long)]
-    pub target_stderr: Option<f64>,
-    /// Feedback rate [Hz] of the drive.
-    #[arg(long, default_value_t = 500.0)]
-    pub rate: f64,
-    /// Where to write the pattern file (for `drive --pattern-file` and `sim --pattern-file`).
-    #[arg(short, long, default_value = "plan.json")]
-    pub output: PathBuf,
+command_args! {
+    /// Arguments of `propid plan`.
+    pub struct Args {
+        settings {
+            setpoint_rat_lo_hi: LoHi as "LO HI",
+        }
+        registers {}
+        nested {}
+        /// A fit from an earlier run (`propid fit` YAML): its mass and c2 are the prior.
+        #[arg(long)]
+        pub fit: Option<PathBuf>,
+        /// Prior inertia J [kg·m²] (instead of --fit).
+        #[arg(long)]
+        pub inertia: Option<f64>,
+        /// Prior drag c2 [N·m·s²/rad²] (instead of --fit).
+        #[arg(long)]
+        pub c2: Option<f64>,
+        /// The drive's torque at setpoint 1 [N·m].
+        #[arg(long)]
+        pub max_torque: f64,
+        /// Largest speed the stand may reach [rad/s].
+        #[arg(long)]
+        pub max_speed: Option<f64>,
+        /// Longest pattern [s] (the seed's pattern_duration).
+        #[arg(long, default_value_t = 200.0)]
+        pub duration: f64,
+        /// Plan for this relative standard error of J and c2 [%] instead of the seed's precision.
+        #[arg(long)]
+        pub target_stderr: Option<f64>,
+        /// Feedback rate [Hz] of the drive.
+        #[arg(long, default_value_t = 500.0)]
+        pub rate: f64,
+        /// Where to write the pattern file (for `drive --pattern-file` and `sim --pattern-file`).
+        #[arg(short, long, default_value = "plan.json")]
+        pub output: PathBuf,
+    }
 }
 
 /// A `key: number` line of a YAML file.
@@ -125,9 +131,16 @@ fn print(plan: &Plan) {
 }
 
 /// Runs `propid plan`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(mut args: Args) -> anyhow::Result<()> {
+    // The setpoint range is the drive's setting: from the flag or SETPOINT_RAT_LO_HI.
+    let mut errors = ConfigErrors::default();
+    fill(&mut args, &environment(), None, &[], &mut errors);
+    let range = errors.or(args.setpoint_rat_lo_hi.take(), SetpointRange::SEED);
+    let (Some(range), Ok(())) = (range, errors.clone().check()) else {
+        return Err(errors.into());
+    };
+    let (lo, hi) = (range.lo(), range.hi());
     let prior = args.prior()?;
-    let (lo, hi) = crate::cmd::drive::parse_lo_hi(&args.setpoint_rat_lo_hi)?;
     if let Some(t) = args.target_stderr.filter(|t| !(*t > 0.0 && *t < 100.0)) {
         return Err(InputError(format!("--target-stderr must be in (0, 100) % (got {t})")).into());
     }

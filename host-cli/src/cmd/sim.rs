@@ -9,7 +9,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use propid_io::tsv::TsvWriter;
 use propid_mechsim::{
-    Braking, ConfigError, CurrentLoop, Disturbance, MechConfig, MechStand, ReportNoise, Run,
+    Braking, ConfigError, CurrentLoop, Disturbance, Field, MechConfig, MechStand, ReportNoise, Run,
     TorqueReport, TsvSink, VelocityEstimator,
 };
 use propid_science::excitation::{Excitation, Pattern};
@@ -363,77 +363,87 @@ impl MechArgs {
     }
 }
 
-/// The flag a mechsim configuration field comes from.
-fn flag_of(field: &str) -> &'static str {
+/// The flag that sets a field of the mechanism-level stand (`None`: propid sets it itself).
+/// Every field is listed: a field added to the stand does not compile here until it has its
+/// answer.
+fn flag(field: Field) -> Option<&'static str> {
     match field {
-        "rotor.inertia" => "--inertia",
-        "rotor.drag.k" => "--c2",
-        "rotor.drag.exponent" => "--drag-exponent",
-        "rotor.drag.cq_slope" => "--cq-slope",
-        "rotor.drag.cq_reference_speed" => "--cq-reference-speed",
-        "rotor.bearing.coulomb" => "--coulomb",
-        "rotor.bearing.breakaway" => "--breakaway",
-        "rotor.bearing.stribeck_speed" => "--stribeck-speed",
-        "rotor.bearing.viscous" => "--c1",
-        "rotor.cogging.amplitude" => "--ripple",
-        "rotor.cogging.harmonic" => "--ripple-harmonic",
-        "motor.kt" => "--motor-kt",
-        "motor.resistance" => "--motor-resistance",
-        "motor.inductance" => "--motor-inductance",
-        "motor.supply_voltage" => "--supply-voltage",
-        "drive.max_torque" => "--max-torque",
-        "drive.control_rate" => "--control-rate",
-        "drive.current_loop.bandwidth" => "--current-loop-bandwidth",
-        "drive.kt_error" => "--kt-error",
-        "drive.braking.torque" => "--braking-torque",
-        "sensing.kinematics.counts_per_rev" => "--counts-per-rev",
-        "sensing.kinematics.velocity.natural_hz" => "--observer-hz",
-        "sensing.kinematics.velocity.damping" => "--observer-damping",
-        "sensing.kinematics.acceleration_filter" => "--acceleration-filter",
-        "sensing.torque.filter" => "--current-filter",
-        "sensing.torque.offset" => "--force-offset",
-        "sensing.torque.natural_hz" => "--load-cell-hz",
-        "sensing.torque.damping" => "--load-cell-damping",
-        "sensing.torque.rate" => "--load-cell-rate",
-        "sensing.noise.force" => "--noise-force",
-        "sensing.noise.velocity" => "--noise-velocity",
-        "sensing.noise.acceleration" => "--noise-acceleration",
-        "disturbance.amplitude" => "--disturbance or --bump",
-        "disturbance.hz" => "--disturbance-hz",
-        "disturbance.start" => "--bump-start",
-        "disturbance.width" => "--bump-width",
-        "link.rate" => "--rate",
-        "link.clock.rate_error" => "--clock-rate-error",
-        "link.clock.drift" => "--clock-drift",
-        "link.clock.stamp_jitter" => "--jitter",
-        "link.drop_probability" => "--drop-probability",
-        "link.latency" => "--latency",
-        "link.latency_jitter" => "--latency-jitter",
-        "run.init_setpoint" => "--hi",
-        "run.init_duration" => "--init-duration",
-        "run.duration" => "--duration",
-        _ => "",
+        Field::DisturbanceAmplitude => Some("--disturbance or --bump"),
+        Field::DisturbanceHz => Some("--disturbance-hz"),
+        Field::DisturbanceStart => Some("--bump-start"),
+        Field::DisturbanceWidth => Some("--bump-width"),
+        // Set by propid itself, never from a flag.
+        Field::DriveBrakingOffThreshold => None,
+        // Set by propid itself, never from a flag.
+        Field::DriveBrakingOnThreshold => None,
+        Field::DriveBrakingTorque => Some("--braking-torque"),
+        Field::DriveControlRate => Some("--control-rate"),
+        Field::DriveCurrentLoopBandwidth => Some("--current-loop-bandwidth"),
+        Field::DriveKtError => Some("--kt-error"),
+        Field::DriveMaxTorque => Some("--max-torque"),
+        Field::LinkClockDrift => Some("--clock-drift"),
+        // Set by propid itself, never from a flag.
+        Field::LinkClockOffset => None,
+        Field::LinkClockRateError => Some("--clock-rate-error"),
+        Field::LinkClockStampJitter => Some("--jitter"),
+        Field::LinkDropProbability => Some("--drop-probability"),
+        // Set by propid itself, never from a flag.
+        Field::LinkHostOffset => None,
+        Field::LinkLatency => Some("--latency"),
+        Field::LinkLatencyJitter => Some("--latency-jitter"),
+        Field::LinkRate => Some("--rate"),
+        Field::MotorInductance => Some("--motor-inductance"),
+        Field::MotorKt => Some("--motor-kt"),
+        Field::MotorResistance => Some("--motor-resistance"),
+        Field::MotorSupplyVoltage => Some("--supply-voltage"),
+        Field::RotorBearingBreakaway => Some("--breakaway"),
+        Field::RotorBearingCoulomb => Some("--coulomb"),
+        Field::RotorBearingStribeckSpeed => Some("--stribeck-speed"),
+        Field::RotorBearingViscous => Some("--c1"),
+        Field::RotorCoggingAmplitude => Some("--ripple"),
+        Field::RotorCoggingHarmonic => Some("--ripple-harmonic"),
+        // Set by propid itself, never from a flag.
+        Field::RotorCoggingPhase => None,
+        Field::RotorDragCqReferenceSpeed => Some("--cq-reference-speed"),
+        Field::RotorDragCqSlope => Some("--cq-slope"),
+        Field::RotorDragExponent => Some("--drag-exponent"),
+        Field::RotorDragK => Some("--c2"),
+        Field::RotorInertia => Some("--inertia"),
+        Field::RunDuration => Some("--duration"),
+        Field::RunInitDuration => Some("--init-duration"),
+        Field::RunInitSetpoint => Some("--hi"),
+        Field::SensingKinematicsAccelerationFilter => Some("--acceleration-filter"),
+        Field::SensingKinematicsCountsPerRev => Some("--counts-per-rev"),
+        Field::SensingKinematicsVelocityDamping => Some("--observer-damping"),
+        Field::SensingKinematicsVelocityNaturalHz => Some("--observer-hz"),
+        Field::SensingNoiseAcceleration => Some("--noise-acceleration"),
+        Field::SensingNoiseForce => Some("--noise-force"),
+        Field::SensingNoiseVelocity => Some("--noise-velocity"),
+        Field::SensingTorqueDamping => Some("--load-cell-damping"),
+        Field::SensingTorqueFilter => Some("--current-filter"),
+        Field::SensingTorqueNaturalHz => Some("--load-cell-hz"),
+        Field::SensingTorqueNoise => Some("--current-noise or --load-cell-noise"),
+        Field::SensingTorqueOffset => Some("--force-offset"),
+        Field::SensingTorqueRate => Some("--load-cell-rate"),
     }
 }
 
 /// A mechsim configuration error in terms of the command line.
 fn input_error(e: ConfigError) -> InputError {
+    let name = |field: Field| flag(field).map_or_else(|| field.path().to_string(), String::from);
     match e {
         ConfigError::OutOfRange {
             field,
             requirement,
             value,
-        } => {
-            let flag = flag_of(field);
-            let name = if flag.is_empty() { field } else { flag };
-            // Noise options are standard deviations of the current sense or the load cell too.
-            let name = match (field, name) {
-                ("sensing.torque.noise", _) => "--current-noise or --load-cell-noise",
-                _ => name,
-            };
-            InputError(format!("{name} must be {requirement} (got {value})"))
-        }
-        ConfigError::Inconsistent { fields, why } => InputError(format!("{fields}: {why}")),
+        } => InputError(format!(
+            "{} must be {requirement} (got {value})",
+            name(field)
+        )),
+        ConfigError::Inconsistent {
+            fields: [a, b],
+            why,
+        } => InputError(format!("{} and {}: {why}", name(a), name(b))),
     }
 }
 

@@ -1,49 +1,148 @@
 //! `propid sim-drive`: a simulated Telega on a CAN interface, around
-//! [`propid_drive::sim_drive::run_sim_drive`].
+//! [`propid_drive_host::sim_drive::run_sim_drive`]. Its settings are Telega's registers
+//! (`mns.pub_interval_min`, `uavcan.pub.dynamics.id`, …), each also a flag and an environment
+//! variable.
 
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::SubjectId;
 use propid_core::dsdl::Readiness;
-use propid_drive::realtime::Clock;
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers;
-use propid_drive::sim_drive::{run_sim_drive_machine, SimDrive, SimDriveConfig, SimDriveEvent};
+use propid_drive_host::realtime::{Clock, SystemClock};
+use propid_drive_host::sim_drive::run_sim_drive_machine;
+use propid_drive_host::stand::StandPlant;
+use propid_drive_proto::registers::{
+    self, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN, TELEGA_FEEDBACK_ID, TELEGA_READINESS_ID,
+    TELEGA_SETPOINT_ID,
+};
+use propid_drive_proto::settings::{FeedbackInterval, RunLimit};
+use propid_drive_proto::sim_drive::{sim_drive_registers, SimDrive, SimDriveConfig, SimDriveEvent};
 
+use crate::bus::{Bus, BusArgs};
+use crate::cmd::drive::NodeIdSetting;
 use crate::cmd::sim::StandArgs;
+use crate::settings::{
+    checked, command_args, environment, fill, setting, ConfigErrors, Names, Problem,
+};
 
-/// Arguments of `propid sim-drive`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// This node's ID.
-    #[arg(long, env = "UAVCAN__NODE__ID", default_value = "42")]
-    pub node_id: NodeId,
+setting! {
+    /// The readiness subscription.
+    ReadinessId: Option<SubjectId> =
+        Names::register("readiness-id", TELEGA_READINESS_ID, "UAVCAN__SUB__READINESS__ID"),
+        "Readiness subject (no readiness gating when unset)",
+        crate::settings::subject_id;
+    /// The setpoint subscription.
+    SetpointId: Option<SubjectId> =
+        Names::register("setpoint-id", TELEGA_SETPOINT_ID, "UAVCAN__SUB__SETPOINT_R_TORQ__ID"),
+        "Ratiometric torque setpoint subject [default: 24]",
+        crate::settings::subject_id;
+    /// The feedback publication.
+    FeedbackId: Option<SubjectId> =
+        Names::register("feedback-id", TELEGA_FEEDBACK_ID, "UAVCAN__PUB__DYNAMICS__ID"),
+        "Dynamics feedback subject [default: 110]",
+        crate::settings::subject_id;
+    /// The feedback interval.
+    Interval: FeedbackInterval =
+        Names::register("interval", PUB_INTERVAL_MIN, "MNS__PUB_INTERVAL_MIN"),
+        "Feedback interval [s], writable over the bus [default: 0.002]",
+        within FeedbackInterval;
+    /// Local timestamps.
+    LocalTimestamp: bool =
+        Names::register("local-timestamp", LOCAL_TIMESTAMP, "MNS__LOCAL_TIMESTAMP"),
+        "Stamp the feedback with the drive's clock (false: the timestamp is 0, unknown) [default: true]",
+        crate::settings::bit;
+    /// How long to run.
+    Duration: Option<RunLimit> = Names::flag("duration"),
+        "Stop after this many seconds (0: run until interrupted) [default: 0]",
+        |text: &str| match crate::settings::numbers::<1>(text)? {
+            [0.0] => Ok(None),
+            [x] => RunLimit::new(x).map(Some).map_err(Problem::Range),
+        };
+}
+
+command_args! {
+    /// Arguments of `propid sim-drive`: Telega's registers, each also a flag and a variable.
+    pub struct Args {
+        settings {
+            node_id: NodeIdSetting as "ID",
+            readiness_id: ReadinessId as "ID",
+            setpoint_id: SetpointId as "ID",
+            feedback_id: FeedbackId as "ID",
+            interval: Interval as "S",
+            local_timestamp: LocalTimestamp as "BOOL",
+            duration: Duration as "S",
+        }
+        registers {}
+        nested {
+            bus: BusArgs,
+        }
+        /// The simulated stand.
+        #[command(flatten)]
+        pub stand: StandArgs,
+    }
+}
+
+/// `propid sim-drive`'s settings, checked.
+pub struct Settings {
     /// The bus.
-    #[command(flatten)]
-    pub bus: crate::bus::BusArgs,
-    /// Readiness subject (no readiness gating when unset).
-    #[arg(long, env = "UAVCAN__SUB__READINESS__ID")]
-    pub readiness_id: Option<SubjectId>,
-    /// Ratiometric setpoint subject.
-    #[arg(long, env = "UAVCAN__SUB__SP_RAT__ID", default_value = "24")]
-    pub setpoint_id: SubjectId,
-    /// Dynamics feedback subject.
-    #[arg(long, env = "UAVCAN__PUB__FB_DYN__ID", default_value = "110")]
-    pub feedback_id: SubjectId,
-    /// Feedback interval [s] (register mns.pub_interval_min; writable over the bus).
-    #[arg(long, default_value_t = 0.002)]
-    pub interval: f64,
-    /// Stamp the feedback with the drive's clock (register mns.local_timestamp; when false the
-    /// timestamp is 0, unknown).
-    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub bus: Bus,
+    /// The simulated drive.
+    pub sim: SimDriveConfig,
+    /// Local timestamps at start.
     pub local_timestamp: bool,
-    /// Stop after this many seconds (0: run until interrupted).
-    #[arg(long, default_value_t = 0.0)]
-    pub duration: f64,
-    /// The simulated stand.
-    #[command(flatten)]
+    /// The stand it simulates.
     pub stand: StandArgs,
+}
+
+impl TryFrom<Args> for Settings {
+    type Error = ConfigErrors;
+
+    /// Checks every setting (flags and environment) and reports every error at once.
+    fn try_from(mut args: Args) -> Result<Settings, ConfigErrors> {
+        let mut errors = ConfigErrors::default();
+        fill(&mut args, &environment(), None, &[], &mut errors);
+        let Args {
+            node_id,
+            bus,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            interval,
+            local_timestamp,
+            duration,
+            stand,
+        } = args;
+        let e = &mut errors;
+        let example = SimDriveConfig::example();
+        let node_id = e.id_or(node_id, example.node_id);
+        let bus = Bus::check(bus, e);
+        let readiness_id = e.or(readiness_id, None);
+        let setpoint_id = e.id_or(setpoint_id, example.setpoint_id);
+        let feedback_id = e.id_or(feedback_id, example.feedback_id);
+        let interval = e.or(interval, example.interval);
+        let local_timestamp = e.or(local_timestamp, true);
+        let duration = e.or(duration, None);
+        checked!(
+            errors;
+            node_id, bus, readiness_id, setpoint_id, feedback_id, interval, local_timestamp,
+            duration,
+        );
+        let sim = SimDriveConfig {
+            node_id,
+            mtu: bus.mtu,
+            readiness_id,
+            setpoint_id,
+            feedback_id,
+            interval,
+            duration,
+        };
+        Ok(Settings {
+            bus,
+            sim,
+            local_timestamp,
+            stand,
+        })
+    }
 }
 
 fn readiness_name(v: u8) -> &'static str {
@@ -57,29 +156,24 @@ fn readiness_name(v: u8) -> &'static str {
 
 /// Runs `propid sim-drive`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let cfg = SimDriveConfig {
-        node_id: args.node_id,
-        mtu: args.bus.mtu,
-        readiness_id: args.readiness_id,
-        setpoint_id: args.setpoint_id,
-        feedback_id: args.feedback_id,
-        interval: args.interval,
-        duration: args.duration,
-        stand: args.stand.config()?,
-        seed: args.stand.seed,
-    };
-    cfg.validate().map_err(crate::cmd::drive::flag_error)?;
-    let mut transport = args.bus.open()?;
+    let Settings {
+        bus,
+        sim: cfg,
+        local_timestamp,
+        stand,
+    } = Settings::try_from(args)?;
+    let plant = StandPlant::boxed(stand.config()?, stand.seed)?;
+    let mut transport = bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
-    crate::signals::install(&stop)?;
+    let _handlers = crate::signals::install(&stop)?;
     eprintln!(
         "sim-drive: node {} on {} publishing feedback on subject {}",
         cfg.node_id,
         transport.name(),
         cfg.feedback_id
     );
-    let regs = registers::sim_drive_registers(&cfg, args.local_timestamp);
-    let sim = SimDrive::with_registers(cfg, &regs, SystemClock.now());
+    let regs = sim_drive_registers(&cfg, local_timestamp);
+    let sim = SimDrive::with_registers(cfg, plant, &regs, SystemClock.now());
     let summary =
         run_sim_drive_machine(
             sim,

@@ -1,50 +1,65 @@
 //! `propid telega`: find drives on the bus, read their registers, check the seed's prerequisites
 //! (feedback at ≥ 100 Hz, local timestamps on), fix them when asked and store them when asked;
-//! a thin command over [`propid_drive::telega::BlockingClient`].
+//! a thin command over [`propid_drive_host::telega::BlockingClient`].
 
 use std::time::Duration;
 
 use anyhow::bail;
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::{Mtu, NodeId, SubjectId};
 use propid_core::dsdl::{ExecuteCommandRequest, ExecuteCommandResponse, Value};
-use propid_drive::realtime::SystemClock;
-use propid_drive::registers::{self, check_prerequisites, Problem};
-use propid_drive::telega::BlockingClient;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::register_file::parse_text;
+use propid_drive_host::telega::BlockingClient;
+use propid_drive_proto::registers::{self, check_prerequisites, Problem};
+use propid_drive_proto::settings::Range;
 use propid_transport::CanTransport;
 
+use crate::bus::{Bus, BusArgs};
+use crate::settings::{
+    command_args, environment, fill, seconds_in, setting, ConfigError, ConfigErrors, Names,
+};
 use crate::InputError;
 
-/// Arguments of `propid telega`.
-#[derive(clap::Args, Debug, Clone)]
-pub struct Args {
-    /// The bus.
-    #[command(flatten)]
-    pub bus: crate::bus::BusArgs,
-    /// This tool's own node-ID.
-    #[arg(long, default_value = "126")]
-    pub node_id: NodeId,
-    /// The drive's node-ID (default: every node heard that has Telega's registers).
-    #[arg(long)]
-    pub drive: Option<NodeId>,
-    /// How long to listen for heartbeats [s].
-    #[arg(long, default_value_t = 1.5)]
-    pub listen: f64,
-    /// The feedback subject propid will listen on (checked against uavcan.pub.dynamics.id).
-    #[arg(long)]
-    pub feedback_id: Option<SubjectId>,
-    /// Write a register, NAME=VALUE (repeatable; `true`/`false` for bits).
-    #[arg(long = "set", value_name = "NAME=VALUE")]
-    pub set: Vec<String>,
-    /// Write the values the seed's prerequisites need (mns.pub_interval_min 0.005,
-    /// mns.local_timestamp true, and uavcan.pub.dynamics.id when --feedback-id is given).
-    #[arg(long)]
-    pub fix: bool,
-    /// Ask the drive to store its registers (ExecuteCommand STORE_PERSISTENT_STATES).
-    #[arg(long)]
-    pub store: bool,
-    /// Print every register, not only the checked ones.
-    #[arg(long)]
-    pub all: bool,
+setting! {
+    /// How long to listen.
+    Listen: f64 = Names::flag("listen"),
+        "How long to listen for heartbeats [s] [default: 1.5]",
+        |text: &str| seconds_in(text, Range { lo: 0.0, lo_open: true, hi: 60.0, hi_open: false, unit: "s" });
+}
+
+command_args! {
+    /// Arguments of `propid telega`.
+    pub struct Args {
+        settings {
+            listen: Listen as "S",
+        }
+        registers {}
+        nested {
+            bus: BusArgs,
+        }
+        /// This tool's own node-ID.
+        #[arg(long, default_value = "126")]
+        pub node_id: NodeId,
+        /// The drive's node-ID (default: every node heard that has Telega's registers).
+        #[arg(long)]
+        pub drive: Option<NodeId>,
+        /// The feedback subject propid will listen on (checked against uavcan.pub.dynamics.id).
+        #[arg(long)]
+        pub feedback_id: Option<SubjectId>,
+        /// Write a register, NAME=VALUE (repeatable; `true`/`false` for bits).
+        #[arg(long = "set", value_name = "NAME=VALUE")]
+        pub set: Vec<String>,
+        /// Write the values the seed's prerequisites need (mns.pub_interval_min 0.005,
+        /// mns.local_timestamp true, and uavcan.pub.dynamics.id when --feedback-id is given).
+        #[arg(long)]
+        pub fix: bool,
+        /// Ask the drive to store its registers (ExecuteCommand STORE_PERSISTENT_STATES).
+        #[arg(long)]
+        pub store: bool,
+        /// Print every register, not only the checked ones.
+        #[arg(long)]
+        pub all: bool,
+    }
 }
 
 fn client_err(e: String) -> anyhow::Error {
@@ -67,7 +82,12 @@ fn write(
     if !current.mutable {
         bail!("drive {drive}: {name} is read-only");
     }
-    let value = registers::parse_for(&current.value, name, text, "--set")?;
+    let value = parse_text(&current.value, text).ok_or_else(|| {
+        InputError(format!(
+            "--set: `{text}` is not a valid {} for register {name}",
+            registers::describe(&current.value)
+        ))
+    })?;
     let after = client
         .access(drive, name, value.clone())
         .map_err(client_err)?
@@ -118,7 +138,7 @@ fn subject(found: &[(String, Value)], name: &str) -> Option<SubjectId> {
 pub fn drive_ports(
     transport: &mut dyn CanTransport,
     node_id: NodeId,
-    mtu: usize,
+    mtu: Mtu,
     drive: NodeId,
 ) -> anyhow::Result<DrivePorts> {
     let mut client = BlockingClient::new(transport, &SystemClock, node_id, mtu);
@@ -143,7 +163,7 @@ pub fn drive_ports(
 }
 
 fn registers_checked_and_ports() -> Vec<&'static str> {
-    let mut v = propid_drive::telega::CHECKED_REGISTERS.to_vec();
+    let mut v = propid_drive_proto::telega::CHECKED_REGISTERS.to_vec();
     v.extend([
         registers::TELEGA_SETPOINT_ID,
         registers::TELEGA_READINESS_ID,
@@ -161,30 +181,32 @@ fn flags(mutable: bool, persistent: bool) -> &'static str {
 }
 
 /// Runs `propid telega`.
-pub fn run(args: Args) -> anyhow::Result<()> {
+pub fn run(mut args: Args) -> anyhow::Result<()> {
+    let mut errors = ConfigErrors::default();
+    fill(&mut args, &environment(), None, &[], &mut errors);
     let mut assignments = Vec::new();
     for a in &args.set {
-        let (n, v) = a
-            .split_once('=')
-            .ok_or_else(|| InputError(format!("--set `{a}`: expected NAME=VALUE")))?;
-        assignments.push((n.trim().to_string(), v.trim().to_string()));
+        match a.split_once('=') {
+            Some((n, v)) => assignments.push((n.trim().to_string(), v.trim().to_string())),
+            None => errors.push(ConfigError::Flag {
+                flag: "set",
+                why: format!("`{a}`: expected NAME=VALUE"),
+            }),
+        }
     }
-    if !(args.listen > 0.0 && args.listen <= 60.0) {
-        return Err(InputError(format!(
-            "--listen must be a number of seconds in (0, 60] (got {})",
-            args.listen
-        ))
-        .into());
-    }
-    let mut transport = args.bus.open()?;
-    let mut client =
-        BlockingClient::new(transport.as_mut(), &SystemClock, args.node_id, args.bus.mtu);
+    let listen = errors.or(args.listen.take(), 1.5);
+    let bus = Bus::check(std::mem::take(&mut args.bus), &mut errors);
+    let (Some(listen), Some(bus), Ok(())) = (listen, bus, errors.clone().check()) else {
+        return Err(errors.into());
+    };
+    let mut transport = bus.open()?;
+    let mut client = BlockingClient::new(transport.as_mut(), &SystemClock, args.node_id, bus.mtu);
     let heard = client
-        .discover(Duration::from_secs_f64(args.listen))
+        .discover(Duration::from_secs_f64(listen))
         .map_err(client_err)?;
     let drives: Vec<NodeId> = match args.drive {
         Some(d) if heard.contains(&d) => vec![d],
-        Some(d) => bail!("no heartbeat from node {d} within {} s", args.listen),
+        Some(d) => bail!("no heartbeat from node {d} within {listen} s"),
         None => heard.clone(),
     };
     let mut unresolved = 0;

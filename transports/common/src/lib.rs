@@ -28,6 +28,7 @@
 //! sequence (STANDBY and a zero setpoint) that must go out within a bound.
 #![deny(missing_docs)]
 
+use std::fmt;
 use std::sync::mpsc;
 use std::sync::OnceLock;
 use std::time::Duration;
@@ -35,17 +36,25 @@ use std::time::Duration;
 pub use propid_core::can::Frame;
 use propid_core::time::Instant;
 
-/// Why a transport operation failed.
+/// Why a transport operation failed. Each displays as one sentence naming the device, with the
+/// operating system's words once (never again as a "source": a message chain would repeat them).
 #[derive(Debug, thiserror::Error)]
 pub enum TransportError {
-    /// The device or file could not be used.
-    #[error("{device}: {source}")]
+    /// The device could not be opened; the reason says what fixes it.
+    #[error("{device}: {why}")]
+    Open {
+        /// Interface or device name, as given (`slcan:/dev/ttyACM0`, `socketcan:can0`).
+        device: String,
+        /// Why, typed.
+        why: OpenError,
+    },
+    /// The device failed while in use.
+    #[error("{device}: {error}")]
     Io {
         /// Interface or device name.
         device: String,
-        /// The underlying error.
-        #[source]
-        source: std::io::Error,
+        /// The operating system's error.
+        error: std::io::Error,
     },
     /// The device went away (adapter unplugged, peer closed): the transport is unusable.
     #[error("{0}: device disappeared (adapter unplugged or the other end closed)")]
@@ -66,10 +75,148 @@ pub enum TransportError {
     /// The request cannot be served by this transport (e.g. CAN FD over SLCAN).
     #[error("{0}")]
     Unsupported(String),
-    /// An interface specification could not be understood.
-    #[error("{0}")]
-    BadSpec(String),
 }
+
+/// The operating systems whose device names a hint gives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Os {
+    /// Linux: `/dev/ttyACM0`, groups and udev rules.
+    Linux,
+    /// macOS: `/dev/cu.usbmodem…`.
+    MacOs,
+    /// Windows: `COM3`.
+    Windows,
+}
+
+impl Os {
+    /// The one this program runs on (another Unix gets the Linux words).
+    pub const fn this() -> Os {
+        if cfg!(target_os = "macos") {
+            Os::MacOs
+        } else if cfg!(windows) {
+            Os::Windows
+        } else {
+            Os::Linux
+        }
+    }
+}
+
+/// Why a device could not be opened, typed, so each displays with the step that fixes it.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum OpenError {
+    /// A serial device that does not exist (adapter not plugged in, a typo).
+    NoSerialDevice(Os),
+    /// Not allowed to open the serial device.
+    SerialPermission {
+        /// Where the program runs.
+        os: Os,
+        /// The device path.
+        path: String,
+    },
+    /// The path exists but is not a serial port (a regular file, a directory).
+    NotASerialPort,
+    /// Another program holds the port.
+    Busy(Os),
+    /// No such SocketCAN interface.
+    NoSuchInterface {
+        /// The interface name.
+        name: String,
+    },
+    /// The kernel has no SocketCAN.
+    NoSocketCan,
+    /// Not allowed to open the SocketCAN interface.
+    CanPermission,
+    /// Anything else, in the operating system's words.
+    Other(String),
+}
+
+impl fmt::Display for OpenError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            OpenError::NoSerialDevice(os) => {
+                write!(f, "no such device. Is the adapter plugged in? ")?;
+                match os {
+                    Os::Linux => write!(
+                        f,
+                        "A Zubax Babel appears as /dev/ttyACM0 or similar: `ls /dev/ttyACM* /dev/serial/by-id/`"
+                    ),
+                    Os::MacOs => write!(
+                        f,
+                        "On macOS it appears as /dev/cu.usbmodem… : `ls /dev/cu.usbmodem*`"
+                    ),
+                    Os::Windows => write!(
+                        f,
+                        "On Windows it appears as a COM port (Device Manager → Ports): give slcan:COM3, for example"
+                    ),
+                }
+            }
+            OpenError::SerialPermission { os, path } => {
+                write!(f, "permission denied. ")?;
+                match os {
+                    Os::Linux => write!(
+                        f,
+                        "Add your user to the group that owns the port (`ls -l {path}` names it: `sudo usermod -aG dialout $USER` on Debian and Ubuntu, `uucp` on Arch and Fedora), then log in again; or install a udev rule that opens the adapter to your user, e.g. /etc/udev/rules.d/50-can-adapter.rules with `SUBSYSTEM==\"tty\", ATTRS{{idVendor}}==\"VID\", MODE=\"0660\", TAG+=\"uaccess\"` (VID from `lsusb`), then `sudo udevadm control --reload` and plug it in again"
+                    ),
+                    Os::MacOs => write!(
+                        f,
+                        "Use the /dev/cu.* device rather than /dev/tty.*, and check `ls -l {path}`"
+                    ),
+                    Os::Windows => write!(
+                        f,
+                        "Another program may hold the port: close it (a terminal, another propid) and try again"
+                    ),
+                }
+            }
+            OpenError::NotASerialPort => write!(
+                f,
+                "not a serial port (a regular file or a directory); give the adapter's device, such as /dev/ttyACM0, /dev/cu.usbmodem… or COM3"
+            ),
+            OpenError::Busy(Os::Windows) => write!(
+                f,
+                "no such port, or another program holds it: check Device Manager → Ports and close other programs using it"
+            ),
+            OpenError::Busy(_) => write!(
+                f,
+                "the port is in use by another program; close it (a terminal, another propid) and try again"
+            ),
+            OpenError::NoSuchInterface { name } => write!(
+                f,
+                "no such CAN interface. List them with `ip link show`; bring one up with `sudo ip link set {name} up type can bitrate 1000000` (a USB-CAN adapter must be plugged in)"
+            ),
+            OpenError::NoSocketCan => write!(
+                f,
+                "this kernel has no SocketCAN (`sudo modprobe can_raw`), or use an SLCAN adapter: slcan:DEVICE"
+            ),
+            OpenError::CanPermission => write!(
+                f,
+                "permission denied opening a CAN socket (run with CAP_NET_RAW, or ask an administrator)"
+            ),
+            OpenError::Other(why) => write!(f, "{why}"),
+        }
+    }
+}
+
+/// An interface specification that cannot be understood.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SpecError {
+    /// No `slcan:` or `socketcan:` before the device.
+    #[error("no transport prefix")]
+    NoPrefix,
+    /// A prefix with nothing after it.
+    #[error("no device given")]
+    NoDevice,
+    /// A prefix propid does not know.
+    #[error("unknown transport `{0}`")]
+    UnknownTransport(String),
+    /// `@BAUD` that is not a number.
+    #[error("the baud rate `{0}` is not a number")]
+    BadBaud(String),
+}
+
+/// A bit rate setting that is not one or two integers.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("bit rate `{0}` is not one or two integers (arbitration [data], bit/s)")]
+pub struct BitrateError(pub String);
 
 impl TransportError {
     /// Whether this is the congestion outcome of a send, not a failure.
@@ -211,28 +358,20 @@ pub enum IfaceSpec {
 }
 
 impl IfaceSpec {
+    /// The form it takes: `socketcan:IFACE` or `slcan:DEVICE[@BAUD]`.
+    pub const SYNTAX: &'static str = "socketcan:IFACE or slcan:DEVICE[@BAUD]";
+
     /// Parses one interface (PyCyphal allows several separated by spaces; propid uses the first).
-    pub fn parse(text: &str) -> Result<IfaceSpec, TransportError> {
+    pub fn parse(text: &str) -> Result<IfaceSpec, SpecError> {
         let first = text.split_whitespace().next().unwrap_or("");
-        let bad = |why: &str| {
-            TransportError::BadSpec(format!(
-                "interface `{text}`: {why} (expected `socketcan:IFACE` or `slcan:DEVICE[@BAUD]`)"
-            ))
-        };
-        let (kind, rest) = first
-            .split_once(':')
-            .ok_or_else(|| bad("no transport prefix"))?;
+        let (kind, rest) = first.split_once(':').ok_or(SpecError::NoPrefix)?;
         match kind {
             "socketcan" if !rest.is_empty() => Ok(IfaceSpec::SocketCan {
                 name: rest.to_string(),
             }),
             "slcan" if !rest.is_empty() => {
                 let (path, baud) = match rest.rsplit_once('@') {
-                    Some((p, b)) => (
-                        p,
-                        b.parse()
-                            .map_err(|_| bad("the baud rate is not a number"))?,
-                    ),
+                    Some((p, b)) => (p, b.parse().map_err(|_| SpecError::BadBaud(b.to_string()))?),
                     None => (rest, 115_200),
                 };
                 Ok(IfaceSpec::Slcan {
@@ -240,28 +379,24 @@ impl IfaceSpec {
                     baud,
                 })
             }
-            "socketcan" | "slcan" => Err(bad("no device given")),
-            other => Err(bad(&format!("unknown transport `{other}`"))),
+            "socketcan" | "slcan" => Err(SpecError::NoDevice),
+            other => Err(SpecError::UnknownTransport(other.to_string())),
         }
     }
 }
 
 /// Parses PyCyphal's `UAVCAN__CAN__BITRATE` ("1000000" or "1000000 4000000": arbitration and
 /// data bit rates).
-pub fn parse_bitrate(text: &str) -> Result<(u32, u32), TransportError> {
+pub fn parse_bitrate(text: &str) -> Result<(u32, u32), BitrateError> {
     let v: Vec<u32> = text
         .split_whitespace()
         .map(|x| x.parse())
         .collect::<Result<_, _>>()
-        .map_err(|_| {
-            TransportError::BadSpec(format!("bit rate `{text}` is not one or two integers"))
-        })?;
+        .map_err(|_| BitrateError(text.to_string()))?;
     match v.as_slice() {
         [a] => Ok((*a, *a)),
         [a, d] => Ok((*a, *d)),
-        _ => Err(TransportError::BadSpec(format!(
-            "bit rate `{text}` is not one or two integers"
-        ))),
+        _ => Err(BitrateError(text.to_string())),
     }
 }
 
@@ -407,6 +542,56 @@ mod tests {
         );
         assert_eq!(parse_bitrate("500000").unwrap(), (500_000, 500_000));
         assert!(parse_bitrate("1M").is_err());
+    }
+
+    #[test]
+    fn open_errors_say_what_fixes_them_on_each_os() {
+        let device = |why| {
+            TransportError::Open {
+                device: "slcan:/dev/ttyX".into(),
+                why,
+            }
+            .to_string()
+        };
+        let missing = device(OpenError::NoSerialDevice(Os::Linux));
+        assert!(missing.starts_with("slcan:/dev/ttyX: no such device."));
+        assert!(missing.contains("ls /dev/ttyACM*"), "{missing}");
+        assert!(device(OpenError::NoSerialDevice(Os::MacOs)).contains("/dev/cu.usbmodem*"));
+        assert!(device(OpenError::NoSerialDevice(Os::Windows)).contains("COM3"));
+        let denied = |os| {
+            device(OpenError::SerialPermission {
+                os,
+                path: "/dev/ttyX".into(),
+            })
+        };
+        let linux = denied(Os::Linux);
+        for want in [
+            "dialout",
+            "uucp",
+            "udev rule",
+            "ls -l /dev/ttyX",
+            "log in again",
+        ] {
+            assert!(linux.contains(want), "{want}: {linux}");
+        }
+        assert!(denied(Os::MacOs).contains("/dev/cu."));
+        assert!(denied(Os::Windows).contains("Another program"));
+        let can = TransportError::Open {
+            device: "socketcan:can9".into(),
+            why: OpenError::NoSuchInterface {
+                name: "can9".into(),
+            },
+        }
+        .to_string();
+        assert_eq!(can.matches("ip link").count(), 2, "{can}");
+        assert!(can.contains("sudo ip link set can9 up"), "{can}");
+        // The OS's words appear once: an Io error is not also its own source.
+        let io = TransportError::Io {
+            device: "slcan:/dev/ttyX".into(),
+            error: std::io::Error::other("Input/output error"),
+        };
+        assert!(std::error::Error::source(&io).is_none());
+        assert_eq!(io.to_string(), "slcan:/dev/ttyX: Input/output error");
     }
 
     #[test]

@@ -12,7 +12,7 @@ use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::time::Instant;
-use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
+use propid_transport::{BusState, CanTransport, Health, HostClock, OpenError, Os, TransportError};
 
 use crate::codec::{
     bitrate_command, encode_frame, open_command, raw_bitrate_command, AdapterClock, Decoder, Event,
@@ -56,6 +56,36 @@ pub struct SlcanTransport {
     gone: bool,
 }
 
+/// Why `path` could not be opened as a serial port, typed so the message says what fixes it.
+fn open_error(path: &str, e: &serialport::Error) -> OpenError {
+    use serialport::ErrorKind as K;
+    let os = Os::this();
+    match e.kind() {
+        K::Io(ErrorKind::NotFound) => OpenError::NoSerialDevice(os),
+        K::Io(ErrorKind::PermissionDenied) => OpenError::SerialPermission {
+            os,
+            path: path.to_string(),
+        },
+        K::NoDevice => OpenError::Busy(os),
+        // A path that exists but is no terminal (ENOTTY on a regular file, EISDIR, …).
+        _ if std::fs::metadata(path).is_ok_and(|m| !is_device(&m)) => OpenError::NotASerialPort,
+        _ => OpenError::Other(e.description.clone()),
+    }
+}
+
+/// Whether a file is a device (a character device on Unix; anything that opens on Windows).
+fn is_device(m: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        m.file_type().is_char_device()
+    }
+    #[cfg(not(unix))]
+    {
+        !m.is_file() && !m.is_dir()
+    }
+}
+
 impl SlcanTransport {
     /// Opens `path` at `baud` (non-blocking) and configures the adapter for `bitrate` with
     /// timestamps on.
@@ -63,9 +93,9 @@ impl SlcanTransport {
         let port = serialport::new(path, baud)
             .timeout(Duration::from_millis(10))
             .open_native()
-            .map_err(|e| TransportError::Io {
+            .map_err(|e| TransportError::Open {
                 device: format!("slcan:{path}"),
-                source: std::io::Error::other(e.to_string()),
+                why: open_error(path, &e),
             })?;
         #[cfg(unix)]
         let mut t = Self::from_tty(port, path)?;
@@ -88,7 +118,7 @@ impl SlcanTransport {
         if let Err(e) = flags {
             return Err(TransportError::Io {
                 device: format!("slcan:{name}"),
-                source: std::io::Error::from(e),
+                error: std::io::Error::from(e),
             });
         }
         Ok(Self::from_port(Box::new(port), name))
@@ -156,7 +186,7 @@ impl SlcanTransport {
             if !self.flush(deadline)? {
                 return Err(TransportError::Io {
                     device: self.name.clone(),
-                    source: std::io::Error::new(
+                    error: std::io::Error::new(
                         ErrorKind::TimedOut,
                         format!(
                             "the adapter did not take the command `{}` within {} ms",
@@ -327,7 +357,7 @@ impl SlcanTransport {
         }
         TransportError::Io {
             device: self.name.clone(),
-            source: e,
+            error: e,
         }
     }
 

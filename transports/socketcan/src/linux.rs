@@ -4,7 +4,7 @@ use std::io::ErrorKind;
 use std::time::{Duration, SystemTime};
 
 use propid_core::can::Frame;
-use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
+use propid_transport::{BusState, CanTransport, Health, HostClock, OpenError, TransportError};
 use socketcan::errors::{ControllerProblems, ErrorCause};
 use socketcan::{
     frame::AsPtr, CanAnyFrame, CanDataFrame, CanError, CanFdFrame, CanFdSocket, CanFilter,
@@ -26,12 +26,16 @@ impl SocketCanTransport {
     /// Opens interface `iface` (e.g. `can0`, `vcan0`) for frames up to `mtu` bytes (8 or 64).
     pub fn open(iface: &str, mtu: usize) -> Result<Self, TransportError> {
         let name = format!("socketcan:{iface}");
-        let socket = CanFdSocket::open(iface).map_err(|e| TransportError::Io {
+        let socket = CanFdSocket::open(iface).map_err(|e| TransportError::Open {
             device: name.clone(),
-            source: std::io::Error::new(
-                e.kind(),
-                format!("cannot open the CAN interface ({e}); does it exist and is it up? (`ip link show {iface}`)"),
-            ),
+            why: match e.raw_os_error() {
+                Some(libc::ENODEV | libc::ENXIO) => OpenError::NoSuchInterface {
+                    name: iface.to_string(),
+                },
+                Some(libc::EAFNOSUPPORT | libc::EPROTONOSUPPORT) => OpenError::NoSocketCan,
+                Some(libc::EPERM | libc::EACCES) => OpenError::CanPermission,
+                _ => OpenError::Other(e.to_string()),
+            },
         })?;
         Ok(Self::from_socket(socket, &name, mtu))
     }
@@ -90,7 +94,7 @@ impl SocketCanTransport {
             Ok(n) if n == bytes.len() => Ok(true),
             Ok(n) => Err(TransportError::Io {
                 device: self.name.clone(),
-                source: std::io::Error::other(format!(
+                error: std::io::Error::other(format!(
                     "the kernel took {n} of a {}-byte CAN frame",
                     bytes.len()
                 )),
@@ -132,7 +136,7 @@ impl SocketCanTransport {
             }
             _ => TransportError::Io {
                 device: self.name.clone(),
-                source: e,
+                error: e,
             },
         }
     }

@@ -1,7 +1,7 @@
 //! The seed's driver as a Sans-IO Cyphal node.
 //!
 //! ```text
-//!  DriveConfig::validate (every number, every ID) before anything is sent
+//!  DriveConfig: every number and ID typed, so a configuration out of range cannot be built
 //!  Drive::new(cfg, now)
 //!  phases: Init (at hi, feedback ignored) → Pattern (rows recorded) → Stopping → Stopped
 //!  every setpoint period: Readiness ENGAGED + Vector31 setpoint ─► Node (deadline 2 periods;
@@ -16,22 +16,24 @@
 //! Frames, not the loop, wait: the drive keeps running through congestion and reports the drops.
 
 use std::collections::VecDeque;
-use std::io::Write;
-use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Duration;
 
 use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, Heartbeat, Readiness, Value, Vector31};
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use propid_core::node::{Event, NodeConfig, TxStats};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
-use propid_io::tsv::{Row, Sample, TsvWriter};
-use propid_science::excitation::Excitation;
-use propid_transport::CanTransport;
 
-use crate::realtime::{run_realtime, Clock, RunOutcome};
-use crate::registers::{drive_registers, HostRegistry};
-use crate::{ends_transfer, sample_of, subject_of, HostNode, Machine, StopReason};
+use crate::excitation::Excitation;
+use crate::machine::{Machine, StopReason};
+use crate::node::{ends_transfer, subject_of, HostNode, HostRegistry};
+use crate::registers::{
+    self, n16, real64, DRIVE_FEEDBACK_ID, DRIVE_READINESS_ID, DRIVE_SETPOINT_ID, INIT_DURATION,
+    NODE_ID, PATTERN_DURATION, PERIOD, SETPOINT_PERIOD, SETPOINT_RAT_LO_HI,
+};
+use crate::settings::{Deadman, RelativeError, SetpointPeriod};
 
 /// How many times the stop command (STANDBY + zero setpoint) is queued.
 pub const STOP_REPEATS: u32 = 5;
@@ -42,68 +44,13 @@ pub const SNAPSHOT_SAMPLES: usize = 1000;
 /// How soon a frame the link refused is offered again.
 const RETRY_STEP: Duration = Duration::from_millis(1);
 
-/// A setting that is out of range, named as the seed's register (`init_duration`, `node_id`).
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{setting}: {problem}")]
-pub struct ConfigError {
-    /// The setting's name, as the seed's register or field (`init_duration`).
-    pub setting: &'static str,
-    /// What is wrong with it, and the value given.
-    pub problem: String,
-}
-
-impl ConfigError {
-    /// The error for `setting`.
-    pub fn new(setting: &'static str, problem: impl Into<String>) -> Self {
-        ConfigError {
-            setting,
-            problem: problem.into(),
-        }
-    }
-}
-
-/// Checks that `v` is finite and within `lo..=hi` (`lo_open`: strictly above `lo`).
-pub(crate) fn check_range(
-    setting: &'static str,
-    v: f64,
-    lo: f64,
-    lo_open: bool,
-    hi: f64,
-    unit: &str,
-) -> Result<(), ConfigError> {
-    let ok = v.is_finite() && (if lo_open { v > lo } else { v >= lo }) && v <= hi;
-    if ok {
-        return Ok(());
-    }
-    let bound = if lo_open { "above" } else { "at least" };
-    Err(ConfigError::new(
-        setting,
-        format!("must be a finite number {bound} {lo} and at most {hi} {unit} (got {v})")
-            .replace("  ", " "),
-    ))
-}
-
-pub(crate) fn check_mtu(mtu: usize) -> Result<Mtu, ConfigError> {
-    match mtu {
-        8 => Ok(Mtu::Classic),
-        64 => Ok(Mtu::Fd),
-        _ => Err(ConfigError::new(
-            "mtu",
-            format!("must be 8 or 64 (got {mtu})"),
-        )),
-    }
-}
-
-/// A day: the longest duration any setting may have.
-pub(crate) const DAY: f64 = 86_400.0;
-
-/// The driver's settings.
+/// The driver's settings, each typed: a configuration out of range cannot be built.
 #[derive(Clone, Debug)]
 pub struct DriveConfig {
     /// Node-ID.
     pub node_id: NodeId,
-    /// MTU (8 or 64).
-    pub mtu: usize,
+    /// Frame size.
+    pub mtu: Mtu,
     /// Readiness subject, if any.
     pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
@@ -113,51 +60,75 @@ pub struct DriveConfig {
     /// The drive's node-ID, whose heartbeat is watched for a reboot; `None`: the publisher of
     /// the first feedback message.
     pub drive_node_id: Option<NodeId>,
-    /// The excitation.
-    pub excitation: Excitation,
-    /// Setpoint period [s].
-    pub setpoint_period: f64,
-    /// Deadman timeout [s].
-    pub deadman: f64,
+    /// What to play.
+    pub excitation: Arc<dyn Excitation>,
+    /// Setpoint publication period.
+    pub setpoint_period: SetpointPeriod,
+    /// Deadman timeout: no feedback this long during the pattern stops the run.
+    pub deadman: Deadman,
     /// Keep a running estimate of J, c1, c2 (reported in [`Progress`]).
     pub fit: bool,
     /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
     /// most this (checked once a second); `None`: run the whole pattern.
-    pub until_rel_stderr: Option<f64>,
+    pub until_rel_stderr: Option<RelativeError>,
 }
 
 impl DriveConfig {
-    /// The seed document's example set-up: node 10, readiness on subject 10, setpoint on 24,
-    /// feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman, no running fit.
-    pub fn example(excitation: Excitation) -> Self {
+    /// The seed document's example set-up playing `excitation`: node 10, readiness on subject
+    /// 10, setpoint on 24, feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman,
+    /// no running fit.
+    pub fn example(excitation: impl Excitation + 'static) -> Self {
         DriveConfig {
             node_id: NodeId::from_const(10),
-            mtu: 8,
+            mtu: Mtu::Classic,
             readiness_id: Some(SubjectId::from_const(10)),
             setpoint_id: SubjectId::from_const(24),
             feedback_id: SubjectId::from_const(110),
             drive_node_id: None,
-            excitation,
-            setpoint_period: 0.005,
-            deadman: 0.5,
+            excitation: Arc::new(excitation),
+            setpoint_period: SetpointPeriod::SEED,
+            deadman: Deadman::DEFAULT,
             fit: false,
             until_rel_stderr: None,
         }
     }
+}
 
-    /// Checks every value before anything is sent: finite numbers in range (the IDs are in
-    /// range by type).
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        check_mtu(self.mtu)?;
-        let ex = &self.excitation;
-        check_range("setpoint_period", self.setpoint_period, 0.0, true, 0.5, "s")?;
-        check_range("deadman", self.deadman, 0.0, true, 60.0, "s")?;
-        check_range("period", ex.period, 0.0, true, DAY, "s")?;
-        check_range("pattern_duration", ex.duration, 0.0, true, DAY, "s")?;
-        check_range("init_duration", ex.init_duration, 0.0, false, DAY, "s")?;
-        ex.validate()
-            .map_err(|e| ConfigError::new("setpoint_rat_lo_hi", e.0))
-    }
+/// The drive's registers holding `cfg`'s values (what the node serves while it drives). Every
+/// field is named: one added to [`DriveConfig`] does not compile here until it is served or said
+/// not to be a register.
+pub fn drive_registers(cfg: &DriveConfig, persistent: bool) -> HostRegistry {
+    let DriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        drive_node_id: _,
+        excitation,
+        setpoint_period,
+        deadman: _,
+        fit: _,
+        until_rel_stderr: _,
+    } = cfg;
+    let mut r = registers::drive_defaults(persistent);
+    let s = excitation.schedule();
+    let set = |r: &mut HostRegistry, name: &str, v: Value| {
+        // The names are the defaults' and the types match them: cannot fail.
+        let _ = r.set(name, &v);
+    };
+    set(&mut r, NODE_ID, n16(Some(u16::from(node_id.get()))));
+    let range = [s.range.lo(), s.range.hi()];
+    set(&mut r, SETPOINT_RAT_LO_HI, real64(&range));
+    set(&mut r, PERIOD, real64(&[s.period.get()]));
+    set(&mut r, PATTERN_DURATION, real64(&[s.duration.get()]));
+    set(&mut r, INIT_DURATION, real64(&[s.init_duration.get()]));
+    set(&mut r, SETPOINT_PERIOD, real64(&[setpoint_period.get()]));
+    let readiness = n16(readiness_id.map(SubjectId::get));
+    set(&mut r, DRIVE_READINESS_ID, readiness);
+    set(&mut r, DRIVE_SETPOINT_ID, n16(Some(setpoint_id.get())));
+    set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(feedback_id.get())));
+    r
 }
 
 /// Where the run is.
@@ -243,13 +214,22 @@ impl StopReport {
     }
 }
 
+/// One feedback message as the drive received it: a row of the recording.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FeedbackRow {
+    /// When it arrived, on the caller's clock [s] (the TSV's `ts_local`).
+    pub ts_local: f64,
+    /// What it says (time from the drive's own timestamp).
+    pub sample: Sample,
+}
+
 /// What the drive reports while it runs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DriveEvent {
     /// The init phase is over and recording begins.
     PatternStarted,
     /// One feedback row: write it (and flush it) before the next.
-    Row(Row),
+    Row(FeedbackRow),
     /// Once a second during the pattern.
     Progress(Progress),
     /// The stop sequence began (STANDBY is first in line).
@@ -328,17 +308,16 @@ pub struct Drive {
 
 impl Drive {
     /// A drive that starts now, in the init phase, serving the seed's registers with `cfg`'s
-    /// values. `cfg` must have passed [`DriveConfig::validate`].
+    /// values.
     pub fn new(cfg: DriveConfig, now: Instant) -> Self {
         let registers = drive_registers(&cfg, false);
         Drive::with_registers(cfg, &registers, now)
     }
 
     /// A drive that starts now and serves `registers` (List, Access, port.List every 10 s), as
-    /// [`crate::registers`] builds them. `cfg` must have passed [`DriveConfig::validate`].
+    /// [`drive_registers`] builds them.
     pub fn with_registers(cfg: DriveConfig, registers: &HostRegistry, now: Instant) -> Self {
-        let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
-        let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", mtu);
+        let mut node_config = NodeConfig::new(cfg.node_id, "org.propid.drive", cfg.mtu);
         node_config.software_version.minor = 1;
         let mut node = HostNode::new(node_config, now);
         // Two subscriptions on a fresh node with 8 ports and validated IDs cannot fail.
@@ -347,8 +326,8 @@ impl Drive {
             SubjectId::from_const(Heartbeat::FIXED_SUBJECT_ID),
             Heartbeat::EXTENT_BYTES,
         );
-        crate::registers::serve(&mut node, registers, &[], now);
-        let init_end = now + Duration::from_secs_f64(cfg.excitation.init_duration);
+        registers::serve(&mut node, registers, &[], now);
+        let init_end = now + cfg.excitation.schedule().init_duration.duration();
         Drive {
             drive_id: cfg.drive_node_id,
             cfg,
@@ -399,7 +378,7 @@ impl Drive {
     }
 
     fn setpoint_deadline(&self) -> Duration {
-        Duration::from_secs_f64(self.cfg.setpoint_period * 2.0)
+        Duration::from_secs_f64(self.cfg.setpoint_period.get() * 2.0)
     }
 
     fn tx_counters(&self) -> TxCounters {
@@ -451,7 +430,7 @@ impl Drive {
     fn observe(&mut self, now: Instant) {
         let (last, max_gap) = (
             self.last_now,
-            Duration::from_secs_f64((2.0 * self.cfg.setpoint_period).max(1.0)),
+            Duration::from_secs_f64((2.0 * self.cfg.setpoint_period.get()).max(1.0)),
         );
         self.last_now = self.last_now.max(now);
         if matches!(self.phase, Phase::Stopping | Phase::Stopped) {
@@ -504,21 +483,22 @@ impl Drive {
         }
         if self.phase == Phase::Pattern {
             let elapsed = self.elapsed(now);
-            if elapsed >= self.cfg.excitation.duration {
+            if elapsed >= self.cfg.excitation.schedule().duration.get() {
                 self.stop(now, StopReason::Completed);
             } else if now
                 .saturating_duration_since(self.last_feedback)
                 .as_secs_f64()
-                > self.cfg.deadman
+                > self.cfg.deadman.get()
             {
                 self.stop(
                     now,
                     StopReason::LostFeedback {
-                        deadman: self.cfg.deadman,
+                        deadman: self.cfg.deadman.get(),
                     },
                 );
             } else if now >= self.next_progress {
                 let precise = self.cfg.until_rel_stderr.and_then(|target| {
+                    let target = target.get();
                     let e = self.estimate()?;
                     let (rj, rc) = (e.j_stderr / e.j.abs(), e.c2_stderr / e.c2.abs());
                     (rj <= target && rc <= target).then_some((rj, rc))
@@ -551,11 +531,11 @@ impl Drive {
         }
         if matches!(self.phase, Phase::Init | Phase::Pattern) && now >= self.next_publish {
             let sp = match self.pattern_start {
-                None => self.cfg.excitation.hi,
+                None => self.cfg.excitation.schedule().range.hi(),
                 Some(_) => self.cfg.excitation.setpoint(self.elapsed(now)),
             };
             self.publish(now, Readiness::ENGAGED, sp as f32, self.setpoint_deadline());
-            let period = Duration::from_secs_f64(self.cfg.setpoint_period);
+            let period = self.cfg.setpoint_period.duration();
             self.next_publish = self.next_publish + period;
             if self.next_publish <= now {
                 self.next_publish = now + period;
@@ -572,7 +552,7 @@ impl Drive {
                 if repeats_left > 0 && now >= next && self.nothing_waiting() {
                     let deadline = until.saturating_duration_since(now);
                     self.publish(now, Readiness::STANDBY, 0.0, deadline);
-                    let period = Duration::from_secs_f64(self.cfg.setpoint_period);
+                    let period = self.cfg.setpoint_period.duration();
                     if let Some(s) = self.stopping.as_mut() {
                         s.repeats_left -= 1;
                         s.next = now + period;
@@ -699,7 +679,7 @@ impl Drive {
         // Feedback during the init phase is flushed, as the seed does.
         if self.phase == Phase::Pattern {
             self.last_feedback = now;
-            let sample = sample_of(&fb);
+            let sample = Sample::from(&fb);
             self.rows += 1;
             if sample.is_finite() {
                 self.estimator
@@ -709,7 +689,7 @@ impl Drive {
                 self.recent.pop_front();
             }
             self.recent.push_back(sample);
-            self.events.push_back(DriveEvent::Row(Row {
+            self.events.push_back(DriveEvent::Row(FeedbackRow {
                 ts_local: timestamp.as_secs_f64(),
                 sample,
             }));
@@ -802,7 +782,7 @@ impl Drive {
                             Phase::Init => t = t.min(self.init_end),
                             _ => {
                                 let deadman = self.last_feedback
-                                    + Duration::from_secs_f64(self.cfg.deadman)
+                                    + self.cfg.deadman.duration()
                                     + Duration::from_micros(1);
                                 t = t.min(deadman).min(self.next_progress);
                             }
@@ -845,76 +825,4 @@ impl Machine for Drive {
     fn is_stopped(&self) -> bool {
         self.phase == Phase::Stopped
     }
-}
-
-/// What [`run_drive`] did.
-#[derive(Clone, Debug, PartialEq)]
-pub struct DriveOutcome {
-    /// The machine's report: why it stopped, rows, stop commands handed out, counters.
-    pub report: StopReport,
-    /// What the loop saw of the link (did the stop commands leave the transport?).
-    pub link: RunOutcome,
-}
-
-impl DriveOutcome {
-    /// True when the stop commands were handed out and left the transport.
-    pub fn standby_delivered(&self, readiness: bool) -> bool {
-        self.report.stop_commands_sent(readiness) && self.link.flushed
-    }
-}
-
-/// Runs a [`Drive`] in real time on `transport` (see [`run_realtime`]): the TSV goes to `out`
-/// (header when the pattern starts, each row flushed as it comes, before `on_event` sees it), and
-/// every event goes to `on_event`.
-pub fn run_drive(
-    cfg: DriveConfig,
-    transport: &mut dyn CanTransport,
-    clock: &dyn Clock,
-    stop: &AtomicBool,
-    out: &mut dyn Write,
-    on_event: &mut dyn FnMut(&DriveEvent),
-) -> DriveOutcome {
-    let drive = Drive::new(cfg, clock.now());
-    run_drive_machine(drive, transport, clock, stop, out, on_event)
-}
-
-/// [`run_drive`] for a [`Drive`] built by the caller (e.g. with [`Drive::with_registers`]).
-pub fn run_drive_machine(
-    mut drive: Drive,
-    transport: &mut dyn CanTransport,
-    clock: &dyn Clock,
-    stop: &AtomicBool,
-    out: &mut dyn Write,
-    on_event: &mut dyn FnMut(&DriveEvent),
-) -> DriveOutcome {
-    let mut out = Some(out);
-    let mut writer: Option<TsvWriter<&mut dyn Write>> = None;
-    let mut report = None;
-    let link = run_realtime(&mut drive, transport, clock, stop, &mut |event| {
-        match &event {
-            DriveEvent::PatternStarted => {
-                if let Some(o) = out.take() {
-                    writer = Some(TsvWriter::new(o, true).map_err(|e| e.to_string())?);
-                }
-            }
-            DriveEvent::Row(row) => {
-                if let Some(w) = writer.as_mut() {
-                    w.write(row).map_err(|e| e.to_string())?;
-                }
-            }
-            DriveEvent::Stopped(r) => report = Some(r.clone()),
-            _ => {}
-        }
-        on_event(&event);
-        Ok(())
-    });
-    let report = report.unwrap_or_else(|| StopReport {
-        reason: StopReason::Transport("the drive loop ended before the drive stopped".into()),
-        rows: drive.rows(),
-        standby_sent: 0,
-        zero_setpoints_sent: 0,
-        tx: drive.tx_counters(),
-        estimate: drive.estimate(),
-    });
-    DriveOutcome { report, link }
 }

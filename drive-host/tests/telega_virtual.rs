@@ -5,17 +5,20 @@
 
 use std::time::Duration;
 
-use propid_core::can::{NodeId, SubjectId};
+use propid_core::can::{Mtu, NodeId, SubjectId};
 use propid_core::dsdl::{ExecuteCommandRequest, ExecuteCommandResponse, Readiness, Value};
 use propid_core::time::Instant;
-use propid_drive::drive::{Drive, DriveConfig, DriveEvent};
-use propid_drive::registers::{
-    self, check_prerequisites, sim_drive_registers, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN,
-    TELEGA_FEEDBACK_ID, TELEGA_SETPOINT_ID,
+use propid_drive_host::register_file::parse_text;
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::{Drive, DriveConfig, DriveEvent};
+use propid_drive_proto::registers::{
+    self, check_prerequisites, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN, TELEGA_FEEDBACK_ID,
+    TELEGA_SETPOINT_ID,
 };
-use propid_drive::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
-use propid_drive::telega::{Client, ClientEvent, Op, CHECKED_REGISTERS};
-use propid_drive::virtual_link::{LinkModel, VirtualLink};
+use propid_drive_proto::settings::FeedbackInterval;
+use propid_drive_proto::sim_drive::{sim_drive_registers, SimDrive, SimDriveConfig, SimDriveEvent};
+use propid_drive_proto::telega::{Client, ClientEvent, Op, CHECKED_REGISTERS};
+use propid_drive_proto::virtual_link::{LinkModel, VirtualLink};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 
@@ -24,10 +27,11 @@ const DRIVE: NodeId = NodeId::from_const(42);
 
 /// The simulated Telega as found on a fresh bench: feedback at 20 Hz, no local timestamps.
 fn misconfigured() -> SimDrive {
-    let mut cfg = SimDriveConfig::example(StandConfig::default(), 3);
-    cfg.interval = 0.05;
+    let mut cfg = SimDriveConfig::example();
+    cfg.interval = FeedbackInterval::new(0.05).unwrap();
     let regs = sim_drive_registers(&cfg, false);
-    SimDrive::with_registers(cfg, &regs, T0)
+    let plant = StandPlant::boxed(StandConfig::default(), 3).unwrap();
+    SimDrive::with_registers(cfg, plant, &regs, T0)
 }
 
 /// Runs the client's ops to their end; its events, and the feedback messages the simulated
@@ -44,7 +48,7 @@ impl Bench {
     fn new(sim: SimDrive) -> Bench {
         Bench {
             link: VirtualLink::new(LinkModel::ideal(), T0),
-            client: Client::new(NodeId::from_const(126), 8, T0),
+            client: Client::new(NodeId::from_const(126), Mtu::Classic, T0),
             sim,
             feedback: Vec::new(),
         }
@@ -88,7 +92,7 @@ impl Bench {
 
     fn write(&mut self, name: &str, text: &str) -> Value {
         let current = self.read(&[name]).remove(0).1;
-        let value = registers::parse_for(&current, name, text, "test").unwrap();
+        let value = parse_text(&current, text).unwrap();
         match self
             .run(vec![Op::Access(DRIVE, name.into(), value)])
             .remove(0)
@@ -221,18 +225,20 @@ fn port_ids_take_effect_at_restart_and_the_drive_runs_on_them() {
     // Drive on the IDs the drive's registers hold: 3 s of pattern, then STANDBY.
     let ids = b.read(&[TELEGA_FEEDBACK_ID, TELEGA_SETPOINT_ID]);
     let id = |i: usize| SubjectId::try_from(ids[i].1.float_at(0).unwrap() as u16).unwrap();
-    let mut cfg = DriveConfig::example(Excitation {
-        lo: 0.1,
-        hi: 0.9,
-        period: 2.0,
-        duration: 3.0,
-        init_duration: 0.5,
-        pattern: Pattern::Sine,
-    });
+    let mut cfg = DriveConfig::example(
+        Played::try_from(Excitation {
+            lo: 0.1,
+            hi: 0.9,
+            period: 2.0,
+            duration: 3.0,
+            init_duration: 0.5,
+            pattern: Pattern::Sine,
+        })
+        .unwrap(),
+    );
     cfg.feedback_id = id(0);
     cfg.setpoint_id = id(1);
     cfg.drive_node_id = Some(DRIVE);
-    cfg.validate().unwrap();
     let mut drive = Drive::new(cfg, b.link.now());
     let mut sim = b.sim;
     let mut link = b.link;
@@ -262,18 +268,21 @@ fn port_ids_take_effect_at_restart_and_the_drive_runs_on_them() {
 
 #[test]
 fn the_drive_serves_the_seeds_registers_and_reports_writes() {
-    let mut cfg = DriveConfig::example(Excitation {
-        lo: 0.2,
-        hi: 0.8,
-        period: 2.0,
-        duration: 30.0,
-        init_duration: 20.0,
-        pattern: Pattern::Sine,
-    });
+    let mut cfg = DriveConfig::example(
+        Played::try_from(Excitation {
+            lo: 0.2,
+            hi: 0.8,
+            period: 2.0,
+            duration: 30.0,
+            init_duration: 20.0,
+            pattern: Pattern::Sine,
+        })
+        .unwrap(),
+    );
     cfg.node_id = NodeId::from_const(10);
     let mut drive = Drive::new(cfg, T0);
     let mut link = VirtualLink::new(LinkModel::ideal(), T0);
-    let mut client = Client::new(NodeId::from_const(126), 8, T0);
+    let mut client = Client::new(NodeId::from_const(126), Mtu::Classic, T0);
     let seed_names = [
         "uavcan.node.id",
         "uavcan.node.description",
@@ -338,6 +347,6 @@ fn the_drive_serves_the_seeds_registers_and_reports_writes() {
         [("period".to_string(), Value::real64(&[3.0]).unwrap())]
     );
     // The run keeps the value it started with (the seed reads its registers at start-up).
-    assert_eq!(drive.config().excitation.period, 2.0);
+    assert_eq!(drive.config().excitation.schedule().period.get(), 2.0);
     assert!(drive.registers().get(TELEGA_FEEDBACK_ID).is_none());
 }

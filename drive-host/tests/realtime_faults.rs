@@ -8,10 +8,13 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use propid_core::dsdl::Readiness;
-use propid_drive::drive::{run_drive, DriveConfig};
-use propid_drive::realtime::SystemClock;
-use propid_drive::sim_drive::{run_sim_drive, SimDriveConfig};
-use propid_drive::StopReason;
+use propid_drive_host::drive::run_drive;
+use propid_drive_host::realtime::SystemClock;
+use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::DriveConfig;
+use propid_drive_proto::sim_drive::SimDriveConfig;
+use propid_drive_proto::StopReason;
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 use propid_transport::{BusState, CanTransport, Frame, Health, MemoryBus, TransportError};
@@ -89,7 +92,8 @@ fn run(fault: Fault) {
         let mut b = b;
         std::thread::spawn(move || {
             run_sim_drive(
-                SimDriveConfig::example(StandConfig::default(), 3),
+                SimDriveConfig::example(),
+                StandPlant::boxed(StandConfig::default(), 3).unwrap(),
                 &mut b,
                 &SystemClock,
                 &stop,
@@ -105,14 +109,17 @@ fn run(fault: Fault) {
         sent: Arc::clone(&sent),
         reported: AtomicBool::new(false),
     };
-    let cfg = DriveConfig::example(Excitation {
-        lo: 0.1,
-        hi: 0.9,
-        period: 2.0,
-        duration: 30.0,
-        init_duration: 0.5,
-        pattern: Pattern::Sine,
-    });
+    let cfg = DriveConfig::example(
+        Played::try_from(Excitation {
+            lo: 0.1,
+            hi: 0.9,
+            period: 2.0,
+            duration: 30.0,
+            init_duration: 0.5,
+            pattern: Pattern::Sine,
+        })
+        .unwrap(),
+    );
     let mut out = Vec::new();
     let outcome = run_drive(
         cfg,

@@ -20,7 +20,7 @@ use std::time::Duration;
 use propid_core::time::Instant;
 use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
 
-use crate::{Machine, StopReason};
+use propid_drive_proto::{Machine, StopReason};
 
 /// Where the loop reads the time.
 pub trait Clock {

@@ -10,14 +10,13 @@
 //!    Op::Execute(n, c)   uavcan.node.ExecuteCommand ───────► Executed(status)
 //!  each request: one retry after CALL_TIMEOUT, then answered with None
 //!  is_stopped() ⇔ idle (no op left): virtual_link and run_realtime run it until then
-//!  Blocking: the same Client on a CanTransport through run_realtime, one op per call
+//!  the host runs the same Client on a CanTransport in real time, one op per call
 //! ```
 //! The client is a core `Node` (node-ID, heartbeats, GetInfo answered) like the drive itself: no
 //! second protocol implementation. Register values are converted by the server (Access
 //! semantics); what comes back is what the drive holds.
 
 use std::collections::VecDeque;
-use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use propid_core::can::{Frame, Mtu, NodeId, ServiceId, SubjectId};
@@ -28,11 +27,10 @@ use propid_core::dsdl::{
 };
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
-use propid_transport::CanTransport;
 
-use crate::realtime::{run_realtime, Clock};
+use crate::machine::{Machine, StopReason};
+use crate::node::HostNode;
 use crate::registers::{LOCAL_TIMESTAMP, PUB_INTERVAL_MIN, TELEGA_FEEDBACK_ID};
-use crate::{HostNode, Machine, StopReason};
 
 /// How long a request waits for its answer before its one retry.
 pub const CALL_TIMEOUT: Duration = Duration::from_millis(1000);
@@ -114,8 +112,7 @@ pub struct Client {
 
 impl Client {
     /// A client node with `node_id` (MTU 8 or 64) starting now.
-    pub fn new(node_id: NodeId, mtu: usize, now: Instant) -> Self {
-        let mtu = if mtu == 64 { Mtu::Fd } else { Mtu::Classic };
+    pub fn new(node_id: NodeId, mtu: Mtu, now: Instant) -> Self {
         let mut node = HostNode::new(NodeConfig::new(node_id, "org.propid.telega", mtu), now);
         // A fresh node with 8 port slots: cannot fail.
         let _ = node.subscribe_message(
@@ -429,116 +426,5 @@ impl Machine for Client {
     }
     fn is_stopped(&self) -> bool {
         self.is_idle()
-    }
-}
-
-/// A [`Client`] on a [`CanTransport`] in real time: each call runs one op to its end.
-pub struct BlockingClient<'a> {
-    client: Client,
-    transport: &'a mut dyn CanTransport,
-    clock: &'a dyn Clock,
-}
-
-impl<'a> BlockingClient<'a> {
-    /// A client node `node_id` on `transport`.
-    pub fn new(
-        transport: &'a mut dyn CanTransport,
-        clock: &'a dyn Clock,
-        node_id: NodeId,
-        mtu: usize,
-    ) -> Self {
-        BlockingClient {
-            client: Client::new(node_id, mtu, clock.now()),
-            transport,
-            clock,
-        }
-    }
-
-    /// Runs `op`; its event (a transport failure is an error, its sentence).
-    pub fn run(&mut self, op: Op) -> Result<ClientEvent, String> {
-        self.client.push(op);
-        let stop = AtomicBool::new(false);
-        let mut got = None;
-        run_realtime(
-            &mut self.client,
-            self.transport,
-            self.clock,
-            &stop,
-            &mut |e| {
-                got = Some(e);
-                Ok(())
-            },
-        );
-        match got {
-            Some(ClientEvent::Failed(reason)) => Err(reason.to_string()),
-            Some(e) => Ok(e),
-            None => Err("the client ended without an answer".into()),
-        }
-    }
-
-    /// Listens for heartbeats for `d`; the node-IDs heard.
-    pub fn discover(&mut self, d: Duration) -> Result<Vec<NodeId>, String> {
-        match self.run(Op::Listen(d))? {
-            ClientEvent::Heard(v) => Ok(v),
-            _ => Ok(self.client.heard()),
-        }
-    }
-
-    /// GetInfo of `server` (`None`: no answer).
-    pub fn get_info(&mut self, server: NodeId) -> Result<Option<GetInfoResponse>, String> {
-        Ok(match self.run(Op::GetInfo(server))? {
-            ClientEvent::Info(_, i) => i,
-            _ => None,
-        })
-    }
-
-    /// The register names of `server` (`None`: it does not answer List).
-    pub fn list(&mut self, server: NodeId) -> Result<Option<Vec<String>>, String> {
-        Ok(match self.run(Op::List(server))? {
-            ClientEvent::Names(_, n) => n,
-            _ => None,
-        })
-    }
-
-    /// Reads (`Value::Empty`) or writes a register; what the drive then holds (`None`: no answer).
-    pub fn access(
-        &mut self,
-        server: NodeId,
-        name: &str,
-        value: Value,
-    ) -> Result<Option<RemoteRegister>, String> {
-        Ok(match self.run(Op::Access(server, name.into(), value))? {
-            ClientEvent::Register(_, r) => r,
-            _ => None,
-        })
-    }
-
-    /// Sends a command; its status (`None`: no answer).
-    pub fn execute(&mut self, server: NodeId, command: u16) -> Result<Option<u8>, String> {
-        Ok(match self.run(Op::Execute(server, command))? {
-            ClientEvent::Executed(_, _, s) => s,
-            _ => None,
-        })
-    }
-
-    /// Reads the [`CHECKED_REGISTERS`] of `server` (those it lacks are left out).
-    pub fn read_checked(&mut self, server: NodeId) -> Result<Vec<(String, Value)>, String> {
-        self.read(server, &CHECKED_REGISTERS)
-    }
-
-    /// Reads `names` from `server` (those it lacks are left out). A server that does not answer
-    /// the first read is not asked again (a node without registers costs one timeout, not one
-    /// per name).
-    pub fn read(&mut self, server: NodeId, names: &[&str]) -> Result<Vec<(String, Value)>, String> {
-        let mut out = Vec::new();
-        for (i, name) in names.iter().enumerate() {
-            match self.access(server, name, Value::Empty)? {
-                Some(r) if !r.value.is_empty() => out.push((name.to_string(), r.value)),
-                Some(_) => {}
-                None if i == 0 => break,
-                None => {}
-            }
-        }
-        Ok(out)
     }
 }

@@ -14,80 +14,111 @@
 //!  ExecuteCommand: RESTART (a reboot: new node, uptime from 0, port-IDs from the registers),
 //!                  STORE_PERSISTENT_STATES (acknowledged; values survive a RESTART)
 //! ```
-//! It runs the same stand model as `propid sim` (`propid_science::stand::Stand`).
+//! It runs any [`Plant`]; the host gives it the same stand model as `propid sim`
+//! (`propid_science::stand::Stand`).
 
 use std::collections::VecDeque;
-use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use propid_core::can::{Frame, Mtu, NodeId, Priority, SubjectId};
 use propid_core::dsdl::{DataType, DoF3rdTs, ExecuteCommandRequest, Readiness, Value, Vector31};
 use propid_core::node::{Event, NodeConfig};
 use propid_core::time::Instant;
-use propid_science::stand::{Stand, StandConfig};
 
-use propid_transport::CanTransport;
-
-use crate::drive::{check_mtu, check_range, ConfigError, DAY};
-use crate::realtime::{run_realtime, Clock};
+use crate::machine::{Machine, StopReason};
+use crate::node::{HostNode, HostRegistry};
+use crate::plant::Plant;
 use crate::registers::{
-    sim_drive_registers, subject_register, HostRegistry, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN,
-    TELEGA_FEEDBACK_ID, TELEGA_READINESS_ID, TELEGA_SETPOINT_ID,
+    self, add, n16, port, subject_register, text, FEEDBACK_TYPE, LOCAL_TIMESTAMP, NODE_DESCRIPTION,
+    NODE_ID, PUB_INTERVAL_MIN, READINESS_TYPE, SETPOINT_TYPE, TELEGA_FEEDBACK_ID,
+    TELEGA_READINESS_ID, TELEGA_SETPOINT_ID,
 };
-use crate::{HostNode, Machine, StopReason};
+use crate::settings::{FeedbackInterval, RunLimit};
 
 /// The simulated drive zeroes its torque when no setpoint arrived for this long.
 pub const SIM_DEADMAN: Duration = Duration::from_millis(500);
 
-/// The simulated drive's settings.
-#[derive(Clone, Debug)]
+/// Telega's deadman timeout register (read-only here: [`SIM_DEADMAN`]).
+pub const DEADMAN_TIMEOUT: &str = "mns.deadman_timeout";
+
+/// The simulated drive's settings, each typed: a configuration out of range cannot be built.
+#[derive(Clone, Debug, PartialEq)]
 pub struct SimDriveConfig {
     /// Node-ID.
     pub node_id: NodeId,
-    /// 8 or 64.
-    pub mtu: usize,
+    /// Frame size.
+    pub mtu: Mtu,
     /// Readiness subject (no readiness gating when unset).
     pub readiness_id: Option<SubjectId>,
     /// Setpoint subject.
     pub setpoint_id: SubjectId,
     /// Feedback subject.
     pub feedback_id: SubjectId,
-    /// Feedback interval [s].
-    pub interval: f64,
-    /// Run time limit [s] (0: none).
-    pub duration: f64,
-    /// The stand.
-    pub stand: StandConfig,
-    /// Noise seed.
-    pub seed: u64,
+    /// Feedback interval.
+    pub interval: FeedbackInterval,
+    /// Stop by itself after this long (`None`: run until stopped).
+    pub duration: Option<RunLimit>,
 }
 
 impl SimDriveConfig {
-    /// The counterpart of `DriveConfig::example`: node 42, readiness on 10, setpoint on 24,
-    /// feedback on 110 every 2 ms, Classic CAN, running until stopped.
-    pub fn example(stand: StandConfig, seed: u64) -> Self {
+    /// The counterpart of [`crate::drive::DriveConfig::example`]: node 42, readiness on 10,
+    /// setpoint on 24, feedback on 110 every 2 ms, Classic CAN, running until stopped.
+    pub fn example() -> Self {
         SimDriveConfig {
             node_id: NodeId::from_const(42),
-            mtu: 8,
+            mtu: Mtu::Classic,
             readiness_id: Some(SubjectId::from_const(10)),
             setpoint_id: SubjectId::from_const(24),
             feedback_id: SubjectId::from_const(110),
-            interval: 0.002,
-            duration: 0.0,
-            stand,
-            seed,
+            interval: FeedbackInterval::from_const(0.002),
+            duration: None,
         }
     }
+}
 
-    /// Checks every value before anything is sent.
-    pub fn validate(&self) -> Result<(), ConfigError> {
-        check_mtu(self.mtu)?;
-        check_range("interval", self.interval, 0.0, true, 1.0, "s")?;
-        check_range("duration", self.duration, 0.0, false, DAY, "s")?;
-        self.stand
-            .validate()
-            .map_err(|e| ConfigError::new("stand", e.0))
-    }
+/// The simulated Telega's registers for `cfg`, with local timestamps on or off.
+pub fn sim_drive_registers(cfg: &SimDriveConfig, local_timestamp: bool) -> HostRegistry {
+    // Every field named: one added to SimDriveConfig does not compile here until it is served or
+    // said not to be a register.
+    let SimDriveConfig {
+        node_id,
+        mtu: _,
+        readiness_id,
+        setpoint_id,
+        feedback_id,
+        interval,
+        duration: _,
+    } = cfg;
+    let mut r = HostRegistry::new();
+    let node_id = n16(Some(u16::from(node_id.get())));
+    add(&mut r, NODE_ID, node_id, true, true);
+    add(&mut r, NODE_DESCRIPTION, text(""), true, true);
+    let interval = Value::real32(&[interval.get() as f32]).unwrap_or_default();
+    add(&mut r, PUB_INTERVAL_MIN, interval, true, true);
+    let ts = Value::bit(&[local_timestamp]).unwrap_or_default();
+    add(&mut r, LOCAL_TIMESTAMP, ts, true, true);
+    let deadman = Value::real32(&[SIM_DEADMAN.as_secs_f32()]).unwrap_or_default();
+    add(&mut r, DEADMAN_TIMEOUT, deadman, false, true);
+    let (feedback, setpoint) = (feedback_id.get(), setpoint_id.get());
+    let readiness = readiness_id.map(SubjectId::get);
+    port(
+        &mut r,
+        "pub",
+        "dynamics",
+        Some(feedback),
+        FEEDBACK_TYPE,
+        true,
+    );
+    port(&mut r, "sub", "readiness", readiness, READINESS_TYPE, true);
+    port(
+        &mut r,
+        "sub",
+        "setpoint_r_torq",
+        Some(setpoint),
+        SETPOINT_TYPE,
+        true,
+    );
+    r
 }
 
 /// What the simulated drive saw.
@@ -141,7 +172,7 @@ pub enum SimDriveEvent {
 pub struct SimDrive {
     cfg: SimDriveConfig,
     node: HostNode,
-    stand: Stand,
+    plant: Box<dyn Plant>,
     start: Instant,
     end: Option<Instant>,
     interval: Duration,
@@ -166,13 +197,9 @@ const SIM_COMMANDS: [u16; 2] = [
 /// How long after a RESTART command the simulated drive reboots (its answer leaves first).
 const RESTART_DELAY: Duration = Duration::from_millis(100);
 
-/// The shortest and longest feedback interval the simulated drive accepts [s].
-const INTERVAL_RANGE: (f64, f64) = (1e-4, 1.0);
-
 fn boot_node(cfg: &SimDriveConfig, registers: &HostRegistry, now: Instant) -> HostNode {
-    let mtu = if cfg.mtu == 64 { Mtu::Fd } else { Mtu::Classic };
     let mut node = HostNode::new(
-        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", mtu),
+        NodeConfig::new(cfg.node_id, "org.propid.sim_drive", cfg.mtu),
         now,
     );
     // Fresh node, validated IDs, 8 ports: cannot fail.
@@ -180,26 +207,32 @@ fn boot_node(cfg: &SimDriveConfig, registers: &HostRegistry, now: Instant) -> Ho
     if let Some(id) = cfg.readiness_id {
         let _ = node.subscribe_message(id, Readiness::EXTENT_BYTES);
     }
-    crate::registers::serve(&mut node, registers, &SIM_COMMANDS, now);
+    registers::serve(&mut node, registers, &SIM_COMMANDS, now);
     // An interval the simulation cannot use is refused in the answer itself.
+    let range = FeedbackInterval::RANGE;
     let _ = node
         .registers_mut()
-        .set_limits(PUB_INTERVAL_MIN, INTERVAL_RANGE.0, INTERVAL_RANGE.1);
+        .set_limits(PUB_INTERVAL_MIN, range.lo, range.hi);
     node
 }
 
 impl SimDrive {
-    /// A simulated drive that boots now with Telega's registers holding `cfg`'s values and
-    /// local timestamps on. `cfg` must have passed [`SimDriveConfig::validate`].
-    pub fn new(cfg: SimDriveConfig, now: Instant) -> Self {
+    /// A simulated drive of `plant` that boots now with Telega's registers holding `cfg`'s
+    /// values and local timestamps on.
+    pub fn new(cfg: SimDriveConfig, plant: Box<dyn Plant>, now: Instant) -> Self {
         let registers = sim_drive_registers(&cfg, true);
-        SimDrive::with_registers(cfg, &registers, now)
+        SimDrive::with_registers(cfg, plant, &registers, now)
     }
 
-    /// A simulated drive that boots now serving `registers` (as
-    /// [`crate::registers::sim_drive_registers`] builds them); the feedback interval and local
-    /// timestamping are read from them.
-    pub fn with_registers(mut cfg: SimDriveConfig, registers: &HostRegistry, now: Instant) -> Self {
+    /// A simulated drive of `plant` that boots now serving `registers` (as
+    /// [`sim_drive_registers`] builds them); the feedback interval and local timestamping are
+    /// read from them.
+    pub fn with_registers(
+        mut cfg: SimDriveConfig,
+        plant: Box<dyn Plant>,
+        registers: &HostRegistry,
+        now: Instant,
+    ) -> Self {
         let node = boot_node(&cfg, registers, now);
         if let Some(x) = interval_of(registers) {
             cfg.interval = x;
@@ -211,9 +244,9 @@ impl SimDrive {
         SimDrive {
             local_timestamp,
             restart_at: None,
-            stand: Stand::new(cfg.stand, cfg.seed),
-            end: (cfg.duration > 0.0).then(|| now + Duration::from_secs_f64(cfg.duration)),
-            interval: Duration::from_secs_f64(cfg.interval),
+            plant,
+            end: cfg.duration.map(|d| now + d.duration()),
+            interval: cfg.interval.duration(),
             cfg,
             node,
             start: now,
@@ -253,7 +286,7 @@ impl SimDrive {
             if name == PUB_INTERVAL_MIN {
                 match interval_of(self.node.registers()) {
                     Some(x) => {
-                        self.interval = Duration::from_secs_f64(x);
+                        self.interval = x.duration();
                         // The next message follows the new interval at once.
                         self.next_feedback = self.next_feedback.min(now + self.interval);
                     }
@@ -298,7 +331,7 @@ impl SimDrive {
         self.restart_at = None;
         let registers = self.node.registers().clone();
         let node_id = registers
-            .get("uavcan.node.id")
+            .get(NODE_ID)
             .and_then(|r| r.value.float_at(0))
             .and_then(|v| NodeId::try_from(v as u64).ok());
         if let Some(id) = node_id {
@@ -326,9 +359,9 @@ impl SimDrive {
         &self.summary
     }
 
-    /// The stand (for tests that compare with its state).
-    pub fn stand(&self) -> &Stand {
-        &self.stand
+    /// The plant it drives.
+    pub fn plant(&self) -> &dyn Plant {
+        self.plant.as_ref()
     }
 
     /// Stops (once): nothing more is sent.
@@ -365,10 +398,10 @@ impl SimDrive {
             let alive = self
                 .last_setpoint_at
                 .is_some_and(|s| at.saturating_duration_since(s) < SIM_DEADMAN);
-            self.stand
+            self.plant
                 .set_setpoint(if engaged && alive { self.setpoint } else { 0.0 });
-            self.stand.advance_to(t);
-            let s = self.stand.measure();
+            self.plant.advance_to(t);
+            let s = self.plant.measure();
             let mut fb = DoF3rdTs::default();
             // Without local timestamps the field is 0: "unknown" in Cyphal (this simulation has
             // no network time to stamp with instead).
@@ -422,8 +455,8 @@ impl SimDrive {
                     // the whole interval before it, made the torque lead the reported force by
                     // about half a feedback interval and every lag read from the data short.)
                     let t = now.saturating_duration_since(self.start).as_secs_f64();
-                    if t > self.stand.time() {
-                        self.stand.advance_to(t);
+                    if t > self.plant.time() {
+                        self.plant.advance_to(t);
                     }
                     self.setpoint = f64::from(v.value[0]);
                     self.summary.last_setpoint = Some(v.value[0]);
@@ -519,46 +552,39 @@ impl Machine for SimDrive {
     }
 }
 
-/// Runs a [`SimDrive`] in real time on `transport` until `stop` is raised or its duration ends.
-/// A transport fault is an error (its sentence); otherwise what it saw.
-pub fn run_sim_drive(
-    cfg: SimDriveConfig,
-    transport: &mut dyn CanTransport,
-    clock: &dyn Clock,
-    stop: &AtomicBool,
-) -> Result<SimDriveSummary, String> {
-    let sim = SimDrive::new(cfg, clock.now());
-    run_sim_drive_machine(sim, transport, clock, stop, &mut |_| {})
-}
-
-/// [`run_sim_drive`] for a [`SimDrive`] built by the caller; every event also goes to
-/// `on_event`.
-pub fn run_sim_drive_machine(
-    mut sim: SimDrive,
-    transport: &mut dyn CanTransport,
-    clock: &dyn Clock,
-    stop: &AtomicBool,
-    on_event: &mut dyn FnMut(&SimDriveEvent),
-) -> Result<SimDriveSummary, String> {
-    let mut end = None;
-    run_realtime(&mut sim, transport, clock, stop, &mut |event| {
-        on_event(&event);
-        if let SimDriveEvent::Stopped { reason, summary } = event {
-            end = Some((reason, summary));
-        }
-        Ok(())
-    });
-    match end {
-        Some((StopReason::Completed | StopReason::Signal, summary)) => Ok(summary),
-        Some((reason, _)) => Err(reason.to_string()),
-        None => Err("the simulated drive's loop ended before it stopped".into()),
-    }
-}
-
-/// The feedback interval `mns.pub_interval_min` holds, if usable (finite, 0.1 ms to 1 s).
-fn interval_of(registers: &HostRegistry) -> Option<f64> {
+/// The feedback interval `mns.pub_interval_min` holds, if usable.
+fn interval_of(registers: &HostRegistry) -> Option<FeedbackInterval> {
     registers
         .get(PUB_INTERVAL_MIN)
         .and_then(|r| r.value.float_at(0))
-        .filter(|x| x.is_finite() && (INTERVAL_RANGE.0..=INTERVAL_RANGE.1).contains(x))
+        .and_then(|x| FeedbackInterval::new(x).ok())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::registers::check_prerequisites;
+
+    #[test]
+    fn prerequisites() {
+        let sim = SimDriveConfig::example();
+        let as_list = |r: &HostRegistry| -> Vec<(String, Value)> {
+            r.iter()
+                .map(|x| (x.name.as_str().unwrap().to_string(), x.value.clone()))
+                .collect()
+        };
+        let good = as_list(&sim_drive_registers(&sim, true));
+        assert!(check_prerequisites(&good, Some(SubjectId::from_const(110))).is_empty());
+        let mut slow = sim;
+        slow.interval = FeedbackInterval::new(0.05).unwrap();
+        let bad = as_list(&sim_drive_registers(&slow, false));
+        let p = check_prerequisites(&bad, Some(SubjectId::from_const(111)));
+        let names: Vec<&str> = p.iter().map(|p| p.register.as_str()).collect();
+        assert_eq!(
+            names,
+            [PUB_INTERVAL_MIN, LOCAL_TIMESTAMP, TELEGA_FEEDBACK_ID]
+        );
+        assert_eq!(p[0].found, "0.05");
+        assert_eq!(p[1].found, "false");
+    }
 }

@@ -17,8 +17,10 @@ use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::time::Instant;
-use propid_drive::drive::{Drive, DriveConfig, DriveEvent, StopReport, STOP_REPEATS};
-use propid_drive::{Machine, StopReason};
+use propid_drive_host::stand::Played;
+use propid_drive_proto::drive::{Drive, DriveConfig, DriveEvent, StopReport, STOP_REPEATS};
+use propid_drive_proto::settings::Deadman;
+use propid_drive_proto::{Machine, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
 /// (subject, transfer-ID) of every transfer that left whole, in order.
@@ -43,8 +45,8 @@ fn run_behind_a_stalled_link(stop_at: u64, stall: Range<u64>) -> (Vec<Frame>, St
         pattern: Pattern::Sine,
     };
     let cfg = DriveConfig {
-        deadman: 5.0,
-        ..DriveConfig::example(excitation)
+        deadman: Deadman::new(5.0).unwrap(),
+        ..DriveConfig::example(Played::try_from(excitation).unwrap())
     };
     let mut drive = Drive::new(cfg, Instant::ZERO);
     let ms = |n: u64| Instant::ZERO + Duration::from_millis(n);

@@ -6,14 +6,17 @@ use std::time::Duration;
 
 use propid_core::can::Frame;
 use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
+use propid_core::sample::Sample;
 use propid_core::time::Instant;
-use propid_drive::drive::{
-    Drive, DriveConfig, DriveEvent, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
+use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_proto::drive::{
+    Drive, DriveConfig, DriveEvent, FeedbackRow, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
 };
-use propid_drive::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
-use propid_drive::virtual_link::{LinkModel, VirtualLink};
-use propid_drive::{sample_of, Machine, StopReason};
-use propid_io::tsv::Row;
+use propid_drive_proto::plant::Plant;
+use propid_drive_proto::settings::{Deadman, RelativeError};
+use propid_drive_proto::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
+use propid_drive_proto::virtual_link::{LinkModel, VirtualLink};
+use propid_drive_proto::{Machine, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::StandConfig;
 
@@ -31,13 +34,17 @@ fn seed_excitation(init: f64, duration: f64) -> Excitation {
 }
 
 fn sim_cfg() -> SimDriveConfig {
-    SimDriveConfig::example(StandConfig::default(), 5)
+    SimDriveConfig::example()
+}
+
+fn stand() -> Box<dyn Plant> {
+    StandPlant::boxed(StandConfig::default(), 5).unwrap()
 }
 
 /// Everything a run produced.
 #[derive(Default)]
 struct Run {
-    rows: Vec<Row>,
+    rows: Vec<FeedbackRow>,
     /// (time [µs], event) of phase events.
     phases: Vec<(u64, &'static str)>,
     report: Option<StopReport>,
@@ -155,7 +162,7 @@ fn run_pair(
         first_stop_frames: Vec::new(),
         last_recorded: false,
     };
-    let mut sim = Observed::new(SimDrive::new(sim_cfg(), T0));
+    let mut sim = Observed::new(SimDrive::new(sim_cfg(), stand(), T0));
     let mut link = VirtualLink::new(model, T0);
     let mut run = Run::default();
     let mut acted = false;
@@ -182,14 +189,14 @@ fn assert_rows_are_published(run: &Run) {
     let k = run
         .published
         .iter()
-        .position(|fb| sample_of(fb).t == first.t)
+        .position(|fb| Sample::from(fb).t == first.t)
         .expect("the first row was published");
     for (i, row) in run.rows.iter().enumerate() {
         let fb = &run.published[k + i];
         // Through the wire: what DoF3rdTs carries (float16 fields are rounded by it).
         let mut buf = [0u8; DoF3rdTs::MAX_SIZE_BYTES];
         fb.serialize(&mut buf);
-        let wire = sample_of(&DoF3rdTs::deserialize(&buf).unwrap());
+        let wire = Sample::from(&DoF3rdTs::deserialize(&buf).unwrap());
         assert_eq!(row.sample, wire, "row {i}");
     }
 }
@@ -291,7 +298,7 @@ fn assert_first_frames_are_stop_commands(frames: &[Frame]) {
 #[test]
 fn the_seed_sequence_in_virtual_time() {
     let t = std::time::Instant::now();
-    let cfg = DriveConfig::example(seed_excitation(5.0, 200.0));
+    let cfg = DriveConfig::example(Played::try_from(seed_excitation(5.0, 200.0)).unwrap());
     let (run, sim, link) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
     let wall = t.elapsed();
     let report = run.report.clone().unwrap();
@@ -347,7 +354,7 @@ fn the_seed_sequence_in_virtual_time() {
 
 #[test]
 fn the_same_run_twice_is_the_same() {
-    let cfg = DriveConfig::example(seed_excitation(1.0, 5.0));
+    let cfg = DriveConfig::example(Played::try_from(seed_excitation(1.0, 5.0)).unwrap());
     let (a, _, _) = run_pair(cfg.clone(), LinkModel::ideal(), &mut |_, _, _| true);
     let (b, _, _) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
     assert_eq!(a.rows, b.rows);
@@ -365,8 +372,8 @@ fn congestion_drops_frames_but_the_run_completes_and_standby_arrives() {
         capacity: 4,
     };
     let cfg = DriveConfig {
-        deadman: 2.0,
-        ..DriveConfig::example(seed_excitation(1.0, 10.0))
+        deadman: Deadman::new(2.0).unwrap(),
+        ..DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap())
     };
     let (run, sim, link) = run_pair(cfg, model, &mut |_, _, _| true);
     let report = run.report.clone().unwrap();
@@ -383,7 +390,7 @@ fn congestion_drops_frames_but_the_run_completes_and_standby_arrives() {
     let mut published = run.published.iter().map(|fb| {
         let mut buf = [0u8; DoF3rdTs::MAX_SIZE_BYTES];
         fb.serialize(&mut buf);
-        sample_of(&DoF3rdTs::deserialize(&buf).unwrap())
+        Sample::from(&DoF3rdTs::deserialize(&buf).unwrap())
     });
     for row in &run.rows {
         assert!(published.any(|p| p == row.sample), "{row:?} was published");
@@ -402,7 +409,7 @@ fn at(t: f64) -> impl FnMut(&mut VirtualLink) -> bool {
 fn lost_feedback_stops_at_the_deadman() {
     let mut when = at(3.0);
     let (run, sim, _) = run_pair(
-        DriveConfig::example(seed_excitation(1.0, 10.0)),
+        DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap()),
         LinkModel::ideal(),
         &mut |link, _, _| {
             let go = when(link);
@@ -422,14 +429,14 @@ fn lost_feedback_stops_at_the_deadman() {
 fn a_drive_reboot_stops_the_run() {
     let mut when = at(3.5);
     let (run, _, _) = run_pair(
-        DriveConfig::example(seed_excitation(1.0, 10.0)),
+        DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap()),
         LinkModel::ideal(),
         &mut |link, _, sim| {
             let go = when(link);
             if go {
                 // The drive comes back: a new node, uptime 0.
                 *sim = Observed {
-                    sim: SimDrive::new(sim_cfg(), link.now()),
+                    sim: SimDrive::new(sim_cfg(), stand(), link.now()),
                     rx: std::mem::replace(&mut sim.rx, propid_core::can::Reassembler::new(None)),
                     log: std::mem::take(&mut sim.log),
                 };
@@ -453,9 +460,9 @@ fn a_drive_reboot_stops_the_run() {
 #[test]
 fn a_clock_jump_stops_the_run_with_standby_first() {
     for step in [-2.0f64, 5.0] {
-        let cfg = DriveConfig::example(seed_excitation(1.0, 10.0));
+        let cfg = DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap());
         let mut drive = Drive::new(cfg, T0);
-        let mut sim = SimDrive::new(sim_cfg(), T0);
+        let mut sim = SimDrive::new(sim_cfg(), stand(), T0);
         let mut link = VirtualLink::new(LinkModel::ideal(), T0);
         while link.now() < Instant::from_micros(3_000_000) {
             link.step(&mut drive, &mut sim);
@@ -514,7 +521,7 @@ fn a_fault_from_the_loop_puts_standby_first_and_keeps_rows() {
         let mut when = at(2.5);
         let r = reason.clone();
         let (run, _, _) = run_pair(
-            DriveConfig::example(seed_excitation(1.0, 10.0)),
+            DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap()),
             LinkModel::ideal(),
             &mut |link, drive, _| {
                 let go = when(link);
@@ -553,12 +560,15 @@ fn until_stderr_stops_when_precise_near_the_planned_time() {
     .unwrap();
     let predicted = plan.predicted.seconds;
     let cfg = DriveConfig {
-        until_rel_stderr: Some(target),
-        ..DriveConfig::example(Excitation {
-            duration: 200.0,
-            init_duration: 1.0,
-            ..plan.excitation
-        })
+        until_rel_stderr: Some(RelativeError::new(target).unwrap()),
+        ..DriveConfig::example(
+            Played::try_from(Excitation {
+                duration: 200.0,
+                init_duration: 1.0,
+                ..plan.excitation
+            })
+            .unwrap(),
+        )
     };
     let (run, _, _) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
     let report = run.report.clone().unwrap();

@@ -1,59 +1,11 @@
-//! # propid-drive: the identification run on a bus, as state machines
-//!
-//! The seed's driver is a PyCyphal node that engages a Telega, plays a ratiometric torque pattern
-//! and records the drive's dynamics feedback. [`drive::Drive`] is that node; [`sim_drive::SimDrive`]
-//! is its counterpart, a simulated Telega that runs `propid_science::stand::Stand` behind the same
-//! Cyphal ports, so the whole run can be tested without hardware.
-//!
-//! Both are Sans-IO state machines in the style of the core's `Node` and quinn-proto: they read
-//! no clock and touch no device. Time and frames go in, frames and events come out:
-//!
-//! ```text
-//!  handle_frame(now, &Frame) ─► Node ─► DoF3rdTs ─► DriveEvent::Row (the caller writes + flushes it)
-//!                                   └─► Heartbeat of the drive (uptime went down ⇒ it rebooted: stop)
-//!  poll_transmit(now) ◄─ Node's TxQueue ◄─ Readiness ENGAGED + Vector31 setpoint every period
-//!  handle_blocked(now, frame)   the link refused a frame (WouldBlock): kept, re-offered until its
-//!                               deadline, then dropped and counted
-//!  poll_timeout()               when to call again (the next setpoint, heartbeat or retry)
-//!  poll_event()                 phases, rows, progress, the stop and its report
-//!  handle_fault(now, reason)    signal, transport fault, bus-off, output error ⇒ the stop sequence
-//!  stop sequence: purge the queue ─► STANDBY + zero setpoint first, re-sent STOP_REPEATS times
-//!                 within STOP_WINDOW ─► Stopped(StopReport)
-//! ```
-//!
-//! The only real-time code is [`realtime::run_realtime`]: one thin loop that sleeps until
-//! `poll_timeout` or until a frame arrives, feeds the machine, sends what it polls, hands its
-//! events to the caller and, after the stop, flushes the transport and says whether the stop
-//! commands left. [`virtual_link`] runs two machines against each other on a modelled CAN link in
-//! virtual time, so the seed's 200 s run is a deterministic test of well under a second.
-//!
-//! Both serve registers ([`registers`]): the drive the seed's PyCyphal names (built from defaults,
-//! a register file, the environment and flags), the simulated Telega Telega's (`mns.*`,
-//! `uavcan.pub.dynamics.id`, …), which it obeys. [`telega::Client`] is a third machine, a Cyphal
-//! client on the core `Node` that discovers drives and reads, writes and stores their registers
-//! (what `propid telega` runs on the bus, and the tests run against `SimDrive` in virtual time).
-//!
-//! The library never prints: progress reaches the caller as events.
-#![deny(missing_docs)]
-
-pub mod drive;
-pub mod realtime;
-pub mod registers;
-pub mod sim_drive;
-pub mod telega;
-pub mod virtual_link;
+//! The contract every machine of this crate keeps, so one real-time loop
+//! (`propid_drive_host::realtime::run_realtime`) and one virtual link
+//! ([`crate::virtual_link::VirtualLink`]) can run any of them; and why a machine stops.
 
 use propid_core::can::Frame;
-use propid_core::dsdl::DoF3rdTs;
-use propid_core::node::Node;
 use propid_core::time::Instant;
-use propid_io::tsv::Sample;
 
-/// The node type of the host tools: 8 ports, 16 sessions, 515-byte transfers (a whole
-/// `uavcan.register.Access` request), 256 queued frames, [`registers::HOST_REGISTERS`] registers.
-pub type HostNode = Node<8, 16, 515, 256, { registers::HOST_REGISTERS }>;
-
-/// A Sans-IO machine that [`realtime::run_realtime`] and [`virtual_link`] can drive.
+/// A Sans-IO machine that a real-time loop and [`crate::virtual_link`] can drive.
 pub trait Machine {
     /// What it reports to its caller.
     type Event;
@@ -170,28 +122,4 @@ impl std::fmt::Display for StopReason {
             StopReason::Output(e) => write!(f, "cannot write the recording: {e}"),
         }
     }
-}
-
-/// The TSV sample a `DoF3rdTs` message carries (time from the drive's timestamp).
-pub fn sample_of(fb: &DoF3rdTs) -> Sample {
-    let k = &fb.value.kinematics;
-    Sample {
-        t: fb.timestamp.microsecond as f64 * 1e-6,
-        force: f64::from(fb.value.force),
-        velocity: f64::from(k.base.velocity),
-        acceleration: f64::from(k.acceleration),
-        position: f64::from(k.base.position),
-    }
-}
-
-/// Whether `frame` ends a transfer (its tail byte's end-of-transfer bit).
-pub(crate) fn ends_transfer(frame: &Frame) -> bool {
-    frame.data().last().is_some_and(|t| t & 0x40 != 0)
-}
-
-/// The subject-ID of a message frame (`None` for a service frame).
-pub(crate) fn subject_of(frame: &Frame) -> Option<u16> {
-    let id = frame.id();
-    // Bit 25: service; bits 8..=20: subject-ID.
-    (id & (1 << 25) == 0).then_some(((id >> 8) & 0x1FFF) as u16)
 }

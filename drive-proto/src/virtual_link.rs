@@ -15,7 +15,7 @@ use std::time::Duration;
 use propid_core::can::Frame;
 use propid_core::time::Instant;
 
-use crate::Machine;
+use crate::machine::Machine;
 
 /// The link's properties, the same in both directions.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
