@@ -15,8 +15,8 @@ import json, sys
 truth_j, truth_lag = 2.0e-5, 0.012  # propid demo's defaults (--torque-lag 0.012; the stand's J)
 d = json.load(open(sys.argv[1]))
 lags = [e["value"] for e in d["effects"] if e["name"] == "torque_lag"]
-base = d["base"]["mass"] / truth_j - 1
-extended = d["extended"]["mass"] / truth_j - 1
+base = d["base"]["inertia"] / truth_j - 1
+extended = d["extended"]["inertia"] / truth_j - 1
 gain = d["simulation_rms"]["gain_percent"]
 print(f"demo: seed J {100 * base:+.1f} %, torque_lag {[round(1e3 * l, 2) for l in lags]} ms, "
       f"extended J {100 * extended:+.2f} %, simulated-velocity error -{gain:.1f} %")

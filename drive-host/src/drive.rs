@@ -63,10 +63,7 @@ pub fn run_drive_machine(
             }
             DriveEvent::Row(row) => {
                 if let Some(w) = writer.as_mut() {
-                    let row = Row {
-                        ts_local: row.ts_local,
-                        sample: row.sample,
-                    };
+                    let row = Row::new(row.ts_local, row.sample);
                     w.write(&row).map_err(|e| e.to_string())?;
                 }
             }

@@ -43,6 +43,11 @@ pub enum Command {
     Plan(cmd::plan::Args),
     /// Write one self-contained HTML report of a recording: fit, diagnosis, interactive plots.
     Report(cmd::report::Args),
+    /// Propeller and motor from a stand's log: C_T and C_Q over speed, thrust per watt, figure of
+    /// merit, Kv, resistance, no-load current, efficiency.
+    Propulsion(cmd::propulsion::Args),
+    /// Size the drivetrain: speed, torque, power, current, DC link and battery for a thrust.
+    Size(cmd::size::Args),
     /// Find Telega drives on the bus, check their registers for identification, fix and store them.
     Telega(cmd::telega::Args),
     /// Run the whole pipeline on a simulated stand over a virtual SLCAN bus; no hardware needed.
@@ -64,6 +69,8 @@ impl Cli {
             Command::Report(a) => cmd::report::run(a),
             Command::Demo(a) => cmd::demo::run(a),
             Command::Telega(a) => cmd::telega::run(a),
+            Command::Propulsion(a) => cmd::propulsion::run(a),
+            Command::Size(a) => cmd::size::run(a),
         }
     }
 }

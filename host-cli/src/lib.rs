@@ -67,32 +67,41 @@ pub fn os_words(e: &std::io::Error) -> String {
 /// Exit status of `propid diagnose` when the data cannot support a verdict.
 pub const EXIT_CANNOT_JUDGE: u8 = 3;
 
-/// The exit status for an error: 3 when the data cannot support a verdict, 2 for bad input,
-/// 1 otherwise.
+/// The exit status for an error, for every command: 3 when the data cannot support a verdict,
+/// 2 for bad input (a file's content, a path that cannot be read, a flag's value), 1 otherwise.
+/// The one place where errors become exit statuses.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
-    if err
-        .chain()
-        .any(|e| e.downcast_ref::<CannotJudge>().is_some())
-    {
-        return EXIT_CANNOT_JUDGE;
-    }
     use propid_io::candump::ReplayError;
     use propid_science::fit::FitError;
     // The libraries' error enums wrap bad input transparently (their `source()` is the inner
-    // error's source), so look at the enums themselves too.
-    let bad_input = err.chain().any(|e| {
-        e.downcast_ref::<InputError>().is_some()
-            || e.downcast_ref::<settings::ConfigErrors>().is_some()
-            || e.downcast_ref::<propid_io::tsv::TsvError>().is_some()
-            || matches!(
-                e.downcast_ref::<FitError>(),
-                Some(FitError::Input(_) | FitError::Tsv(_))
-            )
-            || matches!(e.downcast_ref::<ReplayError>(), Some(ReplayError::Input(_)))
+    // error's source), so look into the enums themselves too.
+    let input = err.chain().find_map(|e| {
+        e.downcast_ref::<InputError>()
+            .or(match e.downcast_ref::<FitError>() {
+                Some(FitError::Input(e)) => Some(e),
+                None => None,
+            })
+            .or(match e.downcast_ref::<ReplayError>() {
+                Some(ReplayError::Input(e)) => Some(e),
+                _ => None,
+            })
     });
-    if bad_input {
-        2
+    let cannot_judge = err
+        .chain()
+        .any(|e| e.downcast_ref::<CannotJudge>().is_some())
+        || input.is_some_and(InputError::is_cannot_judge);
+    if cannot_judge {
+        EXIT_CANNOT_JUDGE
+    } else if input.is_some()
+        || err
+            .chain()
+            .any(|e| e.downcast_ref::<settings::ConfigErrors>().is_some())
+    {
+        EXIT_BAD_INPUT
     } else {
         1
     }
 }
+
+/// Exit status for bad input.
+pub const EXIT_BAD_INPUT: u8 = 2;

@@ -86,12 +86,12 @@ pub fn new_token() -> String {
 /// Checks the address the user gave: loopback always; anything else only with `allow_remote`.
 pub fn check_addr(addr: &str, allow_remote: bool) -> Result<SocketAddr, crate::InputError> {
     let parsed: SocketAddr = addr.parse().map_err(|_| {
-        crate::InputError(format!(
+        crate::InputError::invalid(format!(
             "--live `{addr}` is not an address like 127.0.0.1:8080"
         ))
     })?;
     if !parsed.ip().is_loopback() && !allow_remote {
-        return Err(crate::InputError(format!(
+        return Err(crate::InputError::invalid(format!(
             "--live {addr} is not a loopback address: anyone who can reach it and has the token could stop the drive; add --live-allow-remote to serve it anyway"
         )));
     }

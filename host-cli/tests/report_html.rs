@@ -74,7 +74,10 @@ fn report_of_a_missing_file_is_a_clear_error() {
     let out = common::propid(&["report", "/nonexistent/run.tsv"], None);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("/nonexistent/run.tsv: no such file"), "{err}");
+    assert!(
+        err.contains("/nonexistent/run.tsv: cannot open: No such file or directory"),
+        "{err}"
+    );
 }
 
 /// Headless Chromium, as Debian ships it (`apt-get install chromium`).

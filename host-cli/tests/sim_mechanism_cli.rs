@@ -153,7 +153,7 @@ fn an_ambiguous_report_names_the_run_that_resolves_it() {
     };
     let first = diagnose_json(&sim("chirp.tsv", &["--pattern", "chirp"]));
     assert_eq!(first["verdict"]["kind"], "ambiguous", "{first:#}");
-    let a = &first["ambiguity"];
+    let a = &first["ambiguities"][0];
     assert!(
         a["between"]
             .as_array()
@@ -219,17 +219,17 @@ fn a_held_load_cell_is_read_as_a_delay_from_its_updates() {
             .any(|n| n.as_str().unwrap().starts_with("the force updates every")),
         "{report:#}"
     );
-    let mass = report["extended"]["mass"].as_f64().unwrap();
+    let mass = report["extended"]["inertia"].as_f64().unwrap();
     assert!((mass / 2e-5 - 1.0).abs() < 0.02, "{mass}");
 }
 
-/// Below the threshold, end to end: a 70 Hz velocity observer (a PLL on a 4096-count angle)
-/// delays the velocity and acceleration by 2ζ/ω_n = 3.2 ms, which the seed's 0.5 Hz sine hardly
-/// shows (held-out gain about 1.4 %, under the 3 % threshold). `diagnose` names nothing, but says
-/// so ("Nothing is named", not "Nothing is wrong") and lists the lag as a near miss at the right
-/// value with the run that shows it; that run, simulated on the same stand, names the lag alone.
+/// A lag the acceleration equation barely shows, end to end: a 70 Hz velocity observer (a PLL on
+/// a 4096-count angle) delays the velocity and acceleration by 2ζ/ω_n = 3.2 ms, which the seed's
+/// 0.5 Hz sine hardly shows in the acceleration equation (held-out gain under the 3 % an effect
+/// needs from it alone), and the simulated velocity shows clearly: `diagnose` names the lag, at
+/// its value, and the chirp names it too.
 #[test]
-fn a_near_miss_names_the_run_that_shows_it() {
+fn a_lag_the_equation_barely_shows_is_named_by_the_simulation() {
     let dir = tempfile::tempdir().unwrap();
     let sim = |pattern: &str| {
         let tsv = dir.path().join(format!("{pattern}.tsv"));
@@ -255,38 +255,23 @@ fn a_near_miss_names_the_run_that_shows_it() {
         tsv
     };
     let lag = 2.0 * std::f64::consts::FRAC_1_SQRT_2 / (std::f64::consts::TAU * 70.0);
-    let sine = sim("sine");
-    let first = diagnose_json(&sine);
-    assert_eq!(first["verdict"]["kind"], "nothing_wrong", "{first:#}");
-    assert!(first["effects"].as_array().unwrap().is_empty(), "{first:#}");
-    let near = first["near_misses"].as_array().unwrap();
-    let m = near
-        .iter()
-        .find(|m| m["name"] == "torque_lag")
-        .unwrap_or_else(|| panic!("no torque_lag near miss: {first:#}"));
-    let value = m["value"].as_f64().unwrap();
+    let delay_of = |e: &serde_json::Value| {
+        e["lag_delay_s"]
+            .as_f64()
+            .unwrap_or_else(|| panic!("not a lag: {e:#}"))
+    };
+    let first = diagnose_json(&sim("sine"));
+    let effects = first["effects"].as_array().unwrap();
+    assert_eq!(effects.len(), 1, "{first:#}");
+    let value = delay_of(&effects[0]);
     assert!((value / lag - 1.0).abs() < 0.1, "{value} for {lag}");
-    let gain = m["cv_gain_percent"].as_f64().unwrap();
-    assert!((0.5..3.0).contains(&gain), "{gain}");
-    assert_eq!(m["revealing_run"]["pattern"], "chirp", "{m:#}");
-    let text = String::from_utf8(propid_ok(&["diagnose", sine.to_str().unwrap()]).stdout).unwrap();
-    assert!(
-        text.contains("Nothing is named") && !text.contains("Nothing is wrong"),
-        "{text}"
-    );
-    assert!(
-        text.lines().any(
-            |l| l.contains("To see torque_lag") && l.contains("`propid drive --pattern chirp`")
-        ),
-        "{text}"
-    );
-
+    let gain = effects[0]["cv_gain_percent"].as_f64().unwrap();
+    assert!(gain < 3.0, "{gain}");
     let second = diagnose_json(&sim("chirp"));
     assert_eq!(second["verdict"]["kind"], "explained", "{second:#}");
     let effects = second["effects"].as_array().unwrap();
     assert_eq!(effects.len(), 1, "{second:#}");
-    assert_eq!(effects[0]["name"], "torque_lag");
-    let value = effects[0]["value"].as_f64().unwrap();
+    let value = delay_of(&effects[0]);
     assert!((value / lag - 1.0).abs() < 0.1, "{value} for {lag}");
     assert!(
         second["near_misses"].as_array().unwrap().is_empty(),

@@ -201,20 +201,10 @@ impl ReplaySummary {
 /// Why a replay stopped.
 #[derive(Debug, thiserror::Error)]
 pub enum ReplayError {
-    /// The options are invalid.
+    /// The options are invalid, or reading the log failed (the rows before it are written and
+    /// flushed): the error names the log and the line.
     #[error(transparent)]
     Input(#[from] InputError),
-    /// Reading the log failed (the rows before it are written and flushed).
-    #[error("{name}: line {line}")]
-    Read {
-        /// The log's name.
-        name: String,
-        /// 1-based line number.
-        line: u64,
-        /// The I/O error.
-        #[source]
-        source: std::io::Error,
-    },
     /// Writing the TSV failed.
     #[error("writing the TSV")]
     Write(#[from] std::io::Error),
@@ -231,13 +221,15 @@ pub fn replay(
 ) -> Result<ReplaySummary, ReplayError> {
     let feedback_id = options.feedback_id;
     let Some(subject) = SubjectId::new(feedback_id) else {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "feedback subject-ID {feedback_id} is out of range (0..=8191)"
         ))
         .into());
     };
     if let Some(n) = options.source_node.filter(|&n| n > 127) {
-        return Err(InputError(format!("source node-ID {n} is out of range (0..=127)")).into());
+        return Err(
+            InputError::invalid(format!("source node-ID {n} is out of range (0..=127)")).into(),
+        );
     }
     let mut rx: Reassembler<1, 32, 64> = Reassembler::new(None);
     rx.subscribe(Subscription {
@@ -246,7 +238,7 @@ pub fn replay(
         transfer_id_timeout: Duration::from_secs(2),
     })
     .map_err(|_| {
-        InputError(format!(
+        InputError::invalid(format!(
             "feedback subject {feedback_id} cannot be subscribed"
         ))
     })?;
@@ -265,11 +257,11 @@ pub fn replay(
             Ok(0) => break Ok(()),
             Ok(_) => {}
             Err(source) => {
-                break Err(ReplayError::Read {
-                    name: name.to_owned(),
-                    line: summary.lines + 1,
-                    source,
-                })
+                break Err(ReplayError::Input(crate::input::error_of(
+                    name,
+                    &source,
+                    summary.lines + 1,
+                )))
             }
         }
         summary.lines += 1;
@@ -331,16 +323,16 @@ pub fn replay(
             continue;
         };
         let kin = &fb.value.kinematics;
-        if let Err(e) = writer.write(&Row {
-            ts_local: ts,
-            sample: Sample {
+        if let Err(e) = writer.write(&Row::new(
+            ts,
+            Sample {
                 t: fb.timestamp.microsecond as f64 * 1e-6,
                 force: f64::from(fb.value.force),
                 velocity: f64::from(kin.base.velocity),
                 acceleration: f64::from(kin.acceleration),
                 position: f64::from(kin.base.position),
             },
-        }) {
+        )) {
             break Err(e.into());
         }
         summary.rows += 1;

@@ -34,6 +34,34 @@ pub enum Field {
     DriveKtError,
     /// `drive.max_torque`.
     DriveMaxTorque,
+    /// `instruments.bus.current_filter`.
+    InstrumentsBusCurrentFilter,
+    /// `instruments.bus.noise_current`.
+    InstrumentsBusNoiseCurrent,
+    /// `instruments.bus.noise_voltage`.
+    InstrumentsBusNoiseVoltage,
+    /// `instruments.bus.source_resistance`.
+    InstrumentsBusSourceResistance,
+    /// `instruments.bus.source_voltage`.
+    InstrumentsBusSourceVoltage,
+    /// `instruments.thrust.ct_reference_speed`.
+    InstrumentsThrustCtReferenceSpeed,
+    /// `instruments.thrust.ct_slope`.
+    InstrumentsThrustCtSlope,
+    /// `instruments.thrust.exponent`.
+    InstrumentsThrustExponent,
+    /// `instruments.thrust.k`.
+    InstrumentsThrustK,
+    /// `instruments.thrust_cell.damping`.
+    InstrumentsThrustCellDamping,
+    /// `instruments.thrust_cell.natural_hz`.
+    InstrumentsThrustCellNaturalHz,
+    /// `instruments.thrust_cell.noise`.
+    InstrumentsThrustCellNoise,
+    /// `instruments.thrust_cell.offset`.
+    InstrumentsThrustCellOffset,
+    /// `instruments.thrust_cell.rate`.
+    InstrumentsThrustCellRate,
     /// `link.clock.drift`.
     LinkClockDrift,
     /// `link.clock.offset`.
@@ -133,6 +161,20 @@ impl Field {
             Field::DriveCurrentLoopBandwidth => "drive.current_loop.bandwidth",
             Field::DriveKtError => "drive.kt_error",
             Field::DriveMaxTorque => "drive.max_torque",
+            Field::InstrumentsBusCurrentFilter => "instruments.bus.current_filter",
+            Field::InstrumentsBusNoiseCurrent => "instruments.bus.noise_current",
+            Field::InstrumentsBusNoiseVoltage => "instruments.bus.noise_voltage",
+            Field::InstrumentsBusSourceResistance => "instruments.bus.source_resistance",
+            Field::InstrumentsBusSourceVoltage => "instruments.bus.source_voltage",
+            Field::InstrumentsThrustCtReferenceSpeed => "instruments.thrust.ct_reference_speed",
+            Field::InstrumentsThrustCtSlope => "instruments.thrust.ct_slope",
+            Field::InstrumentsThrustExponent => "instruments.thrust.exponent",
+            Field::InstrumentsThrustK => "instruments.thrust.k",
+            Field::InstrumentsThrustCellDamping => "instruments.thrust_cell.damping",
+            Field::InstrumentsThrustCellNaturalHz => "instruments.thrust_cell.natural_hz",
+            Field::InstrumentsThrustCellNoise => "instruments.thrust_cell.noise",
+            Field::InstrumentsThrustCellOffset => "instruments.thrust_cell.offset",
+            Field::InstrumentsThrustCellRate => "instruments.thrust_cell.rate",
             Field::LinkClockDrift => "link.clock.drift",
             Field::LinkClockOffset => "link.clock.offset",
             Field::LinkClockRateError => "link.clock.rate_error",
@@ -505,6 +547,63 @@ pub struct Link {
     pub host_offset: f64,
 }
 
+/// The propeller's thrust: `T = k·|ω|^p·(1 + α·(|ω|/ω_ref − 1))` along the thrust axis. Like
+/// [`Drag`], the last factor lets the thrust coefficient change with speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Thrust {
+    /// k [N·(s/rad)^p]; 0: no thrust.
+    pub k: f64,
+    /// p.
+    pub exponent: f64,
+    /// α: relative change of C_T per unit of |ω|/ω_ref.
+    pub ct_slope: f64,
+    /// ω_ref [rad/s].
+    pub ct_reference_speed: f64,
+}
+
+/// A thrust load cell: a mass-spring-damper driven by the thrust, read by its own ADC at its
+/// own rate and held between readings, with a zero offset and noise per reading.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ThrustCell {
+    /// Natural frequency with the motor and propeller on it [Hz].
+    pub natural_hz: f64,
+    /// Damping ratio.
+    pub damping: f64,
+    /// ADC rate [Hz].
+    pub rate: f64,
+    /// Zero offset [N].
+    pub offset: f64,
+    /// Noise per reading [N].
+    pub noise: f64,
+}
+
+/// The controller's DC side: a source with internal resistance feeding an ESC without losses
+/// (`V_bus·I_bus = v·i`, `d = v/V_bus`), whose reported bus current passes a first-order filter.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bus {
+    /// Source voltage with no load [V].
+    pub source_voltage: f64,
+    /// Source (battery, wiring) resistance [Ω].
+    pub source_resistance: f64,
+    /// Time constant of the ESC's bus-current filter [s] (0: none).
+    pub current_filter: f64,
+    /// Noise on the reported bus voltage [V].
+    pub noise_voltage: f64,
+    /// Noise on the reported bus current [A].
+    pub noise_current: f64,
+}
+
+/// What a thrust stand measures besides the drive's feedback. Off by default.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Instruments {
+    /// The thrust.
+    pub thrust: Thrust,
+    /// The thrust cell (`None`: no thrust column).
+    pub thrust_cell: Option<ThrustCell>,
+    /// The DC bus (`None`: no voltage, current and duty columns).
+    pub bus: Option<Bus>,
+}
+
 /// Everything about a mechanism-level stand.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MechConfig {
@@ -520,6 +619,8 @@ pub struct MechConfig {
     pub disturbance: Disturbance,
     /// The feedback link.
     pub link: Link,
+    /// Thrust cell and DC-bus measurement of a thrust stand (off by default).
+    pub instruments: Instruments,
 }
 
 impl Default for MechConfig {
@@ -591,6 +692,16 @@ impl Default for MechConfig {
                 latency: 0.0,
                 latency_jitter: 0.0,
                 host_offset: 1000.0,
+            },
+            instruments: Instruments {
+                thrust: Thrust {
+                    k: 0.0,
+                    exponent: 2.0,
+                    ct_slope: 0.0,
+                    ct_reference_speed: 1500.0,
+                },
+                thrust_cell: None,
+                bus: None,
             },
         }
     }
@@ -830,6 +941,60 @@ impl MechConfig {
         non_negative(Field::LinkLatency, l.latency)?;
         non_negative(Field::LinkLatencyJitter, l.latency_jitter)?;
         finite(Field::LinkHostOffset, l.host_offset)?;
+
+        let ins = &self.instruments;
+        non_negative(Field::InstrumentsThrustK, ins.thrust.k)?;
+        check(
+            Field::InstrumentsThrustExponent,
+            ins.thrust.exponent,
+            "in [1, 4]",
+            (1.0..=4.0).contains(&ins.thrust.exponent),
+        )?;
+        check(
+            Field::InstrumentsThrustCtSlope,
+            ins.thrust.ct_slope,
+            "in (−1, 1)",
+            ins.thrust.ct_slope.abs() < 1.0,
+        )?;
+        positive(
+            Field::InstrumentsThrustCtReferenceSpeed,
+            ins.thrust.ct_reference_speed,
+        )?;
+        if let Some(c) = ins.thrust_cell {
+            check(
+                Field::InstrumentsThrustCellNaturalHz,
+                c.natural_hz,
+                "> 0 and ≤ control_rate/20",
+                c.natural_hz > 0.0 && c.natural_hz * 20.0 <= d.control_rate,
+            )?;
+            check(
+                Field::InstrumentsThrustCellDamping,
+                c.damping,
+                "in [0.01, 3]",
+                (0.01..=3.0).contains(&c.damping),
+            )?;
+            check(
+                Field::InstrumentsThrustCellRate,
+                c.rate,
+                "> 0 and ≤ control_rate",
+                c.rate > 0.0 && c.rate <= d.control_rate,
+            )?;
+            finite(Field::InstrumentsThrustCellOffset, c.offset)?;
+            non_negative(Field::InstrumentsThrustCellNoise, c.noise)?;
+        }
+        if let Some(b) = ins.bus {
+            positive(Field::InstrumentsBusSourceVoltage, b.source_voltage)?;
+            non_negative(Field::InstrumentsBusSourceResistance, b.source_resistance)?;
+            check(
+                Field::InstrumentsBusCurrentFilter,
+                b.current_filter,
+                "0 or ≥ 2/control_rate",
+                b.current_filter == 0.0
+                    || (b.current_filter >= 2.0 * h && b.current_filter.is_finite()),
+            )?;
+            non_negative(Field::InstrumentsBusNoiseVoltage, b.noise_voltage)?;
+            non_negative(Field::InstrumentsBusNoiseCurrent, b.noise_current)?;
+        }
         Ok(())
     }
 }

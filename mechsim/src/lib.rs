@@ -25,7 +25,11 @@
 //!            own sample rate and zero-order hold, offset, noise)
 //!  feedback messages at the link rate on the device clock (rate error, drift, stamp jitter),
 //!          lost with a probability, received at ts_local = host time + latency (+ jitter)
-//!  ──► Record { ts_local, t, force, velocity, acceleration, position, setpoint, truth }
+//!  a thrust stand's instruments (off by default): thrust k·|ω|^p through a mass-spring-damper
+//!          cell read at its own rate and held; the DC bus: source with resistance, lossless ESC
+//!          (V_bus·I_bus = v·i, duty v/V_bus), bus current through the ESC's first-order filter
+//!  ──► Record { ts_local, t, force, velocity, acceleration, position, setpoint, thrust,
+//!               voltage, current, duty, truth }
 //!  ──► write_tsv: the TSV propid reads
 //! ```
 //! Every mechanism is off in [`MechConfig::default`]: a clean stand whose data satisfy
@@ -60,9 +64,9 @@ pub mod scenarios;
 pub mod stand;
 
 pub use config::{
-    Bearing, Braking, Cogging, ConfigError, CurrentLoop, DeviceClock, Disturbance, Drag, Drive,
-    Field, Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run, Sensing, TorqueReport,
-    VelocityEstimator,
+    Bearing, Braking, Bus, Cogging, ConfigError, CurrentLoop, DeviceClock, Disturbance, Drag,
+    Drive, Field, Instruments, Kinematics, Link, MechConfig, Motor, ReportNoise, Rotor, Run,
+    Sensing, Thrust, ThrustCell, TorqueReport, VelocityEstimator,
 };
-pub use record::{write_tsv, Energy, Record, Truth, TsvSink, TSV_HEADER};
+pub use record::{write_tsv, Energy, Record, Truth, TsvSink, STAND_HEADER, TSV_HEADER};
 pub use stand::{simulate, MechStand};

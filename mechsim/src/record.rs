@@ -44,6 +44,14 @@ pub struct Truth {
     pub acceleration: f64,
     /// Rotor angle, unwrapped [rad].
     pub position: f64,
+    /// Thrust [N].
+    pub thrust: f64,
+    /// Motor (q-axis) voltage [V] (without a DC bus: `None`).
+    pub motor_voltage: Option<f64>,
+    /// Bus voltage [V].
+    pub bus_voltage: Option<f64>,
+    /// Bus current before the ESC's filter [A].
+    pub bus_current: Option<f64>,
     /// Work done so far.
     pub energy: Energy,
 }
@@ -65,6 +73,14 @@ pub struct Record {
     pub position: f64,
     /// The ratiometric setpoint in effect when the message was built.
     pub setpoint: f64,
+    /// The thrust cell's held reading [N] (`None` without a cell, and before its first reading).
+    pub thrust: Option<f64>,
+    /// Reported bus voltage [V] (`None` without a DC bus).
+    pub voltage: Option<f64>,
+    /// Reported bus current, through the ESC's filter [A].
+    pub current: Option<f64>,
+    /// The ESC's duty v/V_bus.
+    pub duty: Option<f64>,
     /// Ground truth.
     pub truth: Truth,
 }
@@ -96,21 +112,39 @@ fn push_number(line: &mut String, v: f64) {
 pub struct TsvSink<W: Write> {
     out: W,
     with_setpoint: bool,
+    with_stand: bool,
     line: String,
 }
 
+/// The stand columns propid reads beside the drive's (`thrust voltage current command`; the
+/// duty is written as `command`).
+pub const STAND_HEADER: [&str; 4] = ["thrust", "voltage", "current", "command"];
+
 impl<W: Write> TsvSink<W> {
     /// Writes the header.
-    pub fn new(mut out: W, with_setpoint: bool) -> std::io::Result<Self> {
+    pub fn new(out: W, with_setpoint: bool) -> std::io::Result<Self> {
+        Self::with_stand(out, with_setpoint, false)
+    }
+
+    /// Writes the header, with the stand columns ([`STAND_HEADER`]) after the others when
+    /// `with_stand`.
+    pub fn with_stand(mut out: W, with_setpoint: bool, with_stand: bool) -> std::io::Result<Self> {
         let mut line = TSV_HEADER.join("\t");
         if with_setpoint {
             line.push_str("\tsetpoint");
+        }
+        if with_stand {
+            for c in STAND_HEADER {
+                line.push('\t');
+                line.push_str(c);
+            }
         }
         line.push('\n');
         out.write_all(line.as_bytes())?;
         Ok(TsvSink {
             out,
             with_setpoint,
+            with_stand,
             line,
         })
     }
@@ -125,10 +159,19 @@ impl<W: Write> TsvSink<W> {
             r.velocity,
             r.acceleration,
             r.position,
-            r.setpoint,
         ];
-        let n = if self.with_setpoint { 7 } else { 6 };
-        for (i, v) in fields[..n].iter().enumerate() {
+        let optional = [
+            (self.with_setpoint, &[r.setpoint][..]),
+            (
+                self.with_stand,
+                &[r.thrust, r.voltage, r.current, r.duty].map(|v| v.unwrap_or(f64::NAN))[..],
+            ),
+        ];
+        let extra = optional
+            .iter()
+            .filter(|(on, _)| *on)
+            .flat_map(|(_, v)| v.iter());
+        for (i, v) in fields.iter().chain(extra).enumerate() {
             if i > 0 {
                 self.line.push('\t');
             }

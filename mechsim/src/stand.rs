@@ -12,6 +12,8 @@
 //! | `AH` | filtered acceleration estimate | acceleration filter |
 //! | `LCX`, `LCV` | load-cell reading and its rate | load cell |
 //! | `ED`, `EL`, `EX` | work done by the drive, lost in drag and bearing, done by the disturbance | always |
+//! | `TCX`, `TCV` | thrust-cell reading and its rate | thrust cell |
+//! | `IBF` | the ESC's filtered bus current | DC bus |
 
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -33,7 +35,10 @@ const LCV: usize = 9;
 const ED: usize = 10;
 const EL: usize = 11;
 const EX: usize = 12;
-const N: usize = 13;
+const TCX: usize = 13;
+const TCV: usize = 14;
+const IBF: usize = 15;
+const N: usize = 16;
 
 type State = [f64; N];
 
@@ -78,6 +83,21 @@ struct Derived {
     pll: Option<(f64, f64)>,
     /// Load cell ω_n² and 2ζω_n.
     cell: Option<(f64, f64)>,
+    /// Thrust cell ω_n² and 2ζω_n.
+    thrust_cell: Option<(f64, f64)>,
+}
+
+/// The DC side at one instant.
+#[derive(Clone, Copy, Debug)]
+struct BusState {
+    /// Motor (q-axis) voltage [V].
+    motor_voltage: f64,
+    /// Bus voltage [V].
+    voltage: f64,
+    /// Bus current [A].
+    current: f64,
+    /// Duty.
+    duty: f64,
 }
 
 /// A mechanism-level stand that runs one recording from rest ([`MechStand::run`] consumes it).
@@ -91,6 +111,8 @@ pub struct MechStand {
     /// Whole turns taken out of the angle states θ and θ̂ (they are kept in [0, 2π)).
     turns: f64,
     rng: StdRng,
+    /// The instruments' own noise and clock phase (no draw from `rng` changes when they are on).
+    instrument_rng: StdRng,
 }
 
 fn normal(sigma: f64) -> Normal<f64> {
@@ -142,6 +164,10 @@ impl MechStand {
             }
             _ => None,
         };
+        let thrust_cell = c.instruments.thrust_cell.map(|tc| {
+            let wn = std::f64::consts::TAU * tc.natural_hz;
+            (wn * wn, 2.0 * tc.damping * wn)
+        });
         Ok(MechStand {
             c,
             d: Derived {
@@ -153,6 +179,7 @@ impl MechStand {
                 omega_eps,
                 pll,
                 cell,
+                thrust_cell,
             },
             x: [0.0; N],
             hold: Hold {
@@ -163,6 +190,7 @@ impl MechStand {
             previous_velocity_estimate: 0.0,
             turns: 0.0,
             rng: StdRng::seed_from_u64(seed),
+            instrument_rng: StdRng::seed_from_u64(seed ^ 0x696e_7374_7275_6d00),
         })
     }
 
@@ -192,6 +220,48 @@ impl MechStand {
                 hold.i_ref
             }
         }
+    }
+
+    /// The propeller's thrust at speed ω [N].
+    fn thrust(&self, w: f64) -> f64 {
+        let t = &self.c.instruments.thrust;
+        if t.k == 0.0 {
+            return 0.0;
+        }
+        let aw = w.abs();
+        let mut x = t.k * aw.powf(t.exponent);
+        if t.ct_slope != 0.0 {
+            x *= 1.0 + t.ct_slope * (aw / t.ct_reference_speed - 1.0);
+        }
+        x
+    }
+
+    /// The motor (q-axis) voltage: the PI loop's output, or for an ideal loop R·i + K_t·ω.
+    fn motor_voltage(&self, x: &State, hold: &Hold) -> f64 {
+        let m = &self.c.motor;
+        if self.d.loop_on {
+            let e = hold.i_ref - x[I];
+            (self.d.kp * e + x[Z] + self.d.kt_nominal * x[W])
+                .clamp(-m.supply_voltage, m.supply_voltage)
+        } else {
+            m.resistance * self.current(x, hold) + m.kt * x[W]
+        }
+    }
+
+    /// The DC side: V_bus from the source and its resistance for the power v·i drawn
+    /// (V_bus² − V_s·V_bus + R_s·v·i = 0), I_bus = v·i/V_bus, d = v/V_bus.
+    fn bus(&self, x: &State, hold: &Hold) -> Option<BusState> {
+        let b = self.c.instruments.bus?;
+        let v = self.motor_voltage(x, hold);
+        let p = v * self.current(x, hold);
+        let disc = (b.source_voltage * b.source_voltage - 4.0 * b.source_resistance * p).max(0.0);
+        let vb = 0.5 * (b.source_voltage + disc.sqrt());
+        Some(BusState {
+            motor_voltage: v,
+            voltage: vb,
+            current: p / vb,
+            duty: v / vb,
+        })
     }
 
     /// Torques at state `x` with the disturbance torque `disturbance`.
@@ -305,6 +375,17 @@ impl MechStand {
             dx[LCX] = x[LCV];
             dx[LCV] = wn2 * (f.rotor_stator - x[LCX]) - two_zeta_wn * x[LCV];
         }
+        if let Some((wn2, two_zeta_wn)) = self.d.thrust_cell {
+            dx[TCX] = x[TCV];
+            dx[TCV] = wn2 * (self.thrust(w) - x[TCX]) - two_zeta_wn * x[TCV];
+        }
+        if let Some(b) = self.c.instruments.bus {
+            if b.current_filter > 0.0 {
+                if let Some(bus) = self.bus(x, hold) {
+                    dx[IBF] = (bus.current - x[IBF]) / b.current_filter;
+                }
+            }
+        }
         dx[ED] = (f.motor + f.cogging + f.brake) * w;
         dx[EL] = (f.drag + f.bearing) * w;
         dx[EX] = f.disturbance * w;
@@ -411,6 +492,21 @@ impl MechStand {
             f64::INFINITY
         };
         let mut cell_held = cell_offset;
+        let ins = c.instruments;
+        let (thrust_noise, thrust_offset, thrust_period) = match ins.thrust_cell {
+            Some(tc) => (normal(tc.noise), tc.offset, 1.0 / tc.rate),
+            None => (normal(0.0), 0.0, f64::INFINITY),
+        };
+        let mut thrust_next = if thrust_period.is_finite() {
+            self.instrument_rng.random::<f64>() * thrust_period
+        } else {
+            f64::INFINITY
+        };
+        let mut thrust_held: Option<f64> = None;
+        let (bus_noise_v, bus_noise_i) = match ins.bus {
+            Some(b) => (normal(b.noise_voltage), normal(b.noise_current)),
+            None => (normal(0.0), normal(0.0)),
+        };
         let mut braking = false;
         let mut next_message: u64 = 0;
         let mut delivered = 0u64;
@@ -452,6 +548,12 @@ impl MechStand {
                 };
                 self.hold.brake = if braking { b.torque } else { 0.0 };
             }
+            while t_sim + 1e-12 >= thrust_next {
+                thrust_held = Some(
+                    self.x[TCX] + thrust_offset + thrust_noise.sample(&mut self.instrument_rng),
+                );
+                thrust_next += thrust_period;
+            }
             while t_sim + 1e-12 >= cell_next {
                 // The report's force noise is the cell's too: drawn with its reading and held
                 // with it (a Tyto log repeats the exact value until the next reading).
@@ -472,6 +574,7 @@ impl MechStand {
                     if !dropped {
                         let f = self.forces(self.disturbance(tp), &self.x, &self.hold);
                         let (v_est, a_est) = self.estimates(&f);
+                        let bus = self.bus(&self.x, &self.hold);
                         let force = match c.sensing.torque {
                             TorqueReport::Setpoint => torque_command,
                             TorqueReport::Current { filter, .. } => {
@@ -502,6 +605,17 @@ impl MechStand {
                             acceleration: a_est / (g * g) + noise_a.sample(rng),
                             position: position.rem_euclid(std::f64::consts::TAU),
                             setpoint,
+                            thrust: thrust_held,
+                            voltage: bus
+                                .map(|b| b.voltage + bus_noise_v.sample(&mut self.instrument_rng)),
+                            current: bus.map(|b| {
+                                let filtered = match ins.bus {
+                                    Some(cfg) if cfg.current_filter > 0.0 => self.x[IBF],
+                                    _ => b.current,
+                                };
+                                filtered + bus_noise_i.sample(&mut self.instrument_rng)
+                            }),
+                            duty: bus.map(|b| b.duty),
                             truth: Truth {
                                 time: tp,
                                 torque_command,
@@ -516,6 +630,10 @@ impl MechStand {
                                 velocity: self.x[W],
                                 acceleration: f.acceleration,
                                 position: self.x[TH] + std::f64::consts::TAU * self.turns,
+                                thrust: self.thrust(self.x[W]),
+                                motor_voltage: bus.map(|b| b.motor_voltage),
+                                bus_voltage: bus.map(|b| b.voltage),
+                                bus_current: bus.map(|b| b.current),
                                 energy: Energy {
                                     drive: self.x[ED],
                                     loss: self.x[EL],

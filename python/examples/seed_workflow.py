@@ -43,7 +43,7 @@ diagnosis = propid.diagnose(run)
 print(diagnosis)  # the command's text report
 for effect in diagnosis.effects:
     print(f"named: {effect.name} = {effect.value:.4g} {effect.unit}")
-print(f"J: seed's model {fit.mass:.4e}, extended model {diagnosis.extended.mass:.4e} kg·m²")
+print(f"J: seed's model {fit.mass:.4e}, extended model {diagnosis.extended.inertia:.4e} kg·m²")
 
 # %% 4. Measured against predicted acceleration.
 try:

@@ -152,15 +152,19 @@ class FitResult(_Record):
 class Model(_Record):
     """A model of the diagnosis (the seed's base model, or base plus the named effects)."""
 
-    mass: _Field[float] = _Field("mass", "Inertia J [kg·m²] (NaN if not identified).", "number")
+    inertia: _Field[float] = _Field(
+        "inertia", "Inertia J [kg·m²] (NaN if not identified).", "number"
+    )
     c1: _Field[float] = _Field("c1", "Viscous coefficient c1 [N·m·s/rad].", "number")
     c2: _Field[float] = _Field("c2", "Quadratic drag coefficient c2 [N·m·s²/rad²].", "number")
-    mass_stderr: _Field[float] = _Field("mass_stderr", "Standard error of `mass`.", "number")
+    inertia_stderr: _Field[float] = _Field(
+        "inertia_stderr", "Standard error of `inertia`.", "number"
+    )
     c2_stderr: _Field[float] = _Field("c2_stderr", "Standard error of `c2`.", "number")
 
     def __repr__(self) -> str:
         return (
-            f"Model(mass={_number(self.mass)} ± {_number(self.mass_stderr)}, "
+            f"Model(inertia={_number(self.inertia)} ± {_number(self.inertia_stderr)}, "
             f"c2={_number(self.c2)} ± {_number(self.c2_stderr)})"
         )
 
@@ -186,7 +190,7 @@ class Diagnosis(_Record):
 
     verdict: _Field[str] = _Field(
         "verdict",
-        "`nothing_wrong`, `explained`, `unexplained`, `ambiguous` or `cannot_judge`.",
+        "`nothing_wrong`, `explained`, `unexplained`, `ambiguous`, `not_identified` or `cannot_judge`.",
         wrap=lambda v: v["kind"],
     )
     samples: _Field[int] = _Field("samples", "Samples analysed.")
@@ -205,8 +209,13 @@ class Diagnosis(_Record):
     unexplained: _Field[Optional[Dict[str, Any]]] = _Field(
         "unexplained", "Structure no candidate explains, if any.", "optional"
     )
-    ambiguity: _Field[Optional[Dict[str, Any]]] = _Field(
-        "ambiguity", "When ambiguous: between which two, both estimates, the separating run.", "optional"
+    ambiguities: _Field[List[Dict[str, Any]]] = _Field(
+        "ambiguities",
+        "Effects the data cannot tell from a named one: both estimates, the other model's J and c2, "
+        "the separating run.",
+    )
+    unidentified: _Field[List[Dict[str, Any]]] = _Field(
+        "unidentified", "Parameters these data do not identify (J, c2), with their estimates."
     )
     near_misses: _Field[List[Dict[str, Any]]] = _Field(
         "near_misses", "Candidates that came close, with the run that would show them."
@@ -241,7 +250,7 @@ class Diagnosis(_Record):
         effects = ", ".join(f"{e.name}={_number(e.value, e.unit)}" for e in self.effects)
         return (
             f"Diagnosis(verdict={self.verdict!r}, effects=[{effects}], "
-            f"mass={_number(self.extended.mass)}, c2={_number(self.extended.c2)}, "
+            f"inertia={_number(self.extended.inertia)}, c2={_number(self.extended.c2)}, "
             f"samples={self.samples})"
         )
 

@@ -146,7 +146,7 @@ fn diagnose_named(
     name: &str,
 ) -> PyResult<(String, String, Option<String>)> {
     let report = py.detach(|| diagnose_rows(rows, DiagnoseOptions { max_effects }));
-    let mut report = report.map_err(|e| InputError::new_err(format!("{name}: {}", e.0)))?;
+    let mut report = report.map_err(|e| InputError::new_err(format!("{name}: {e}")))?;
     if skipped > 0 {
         report
             .notes
@@ -235,10 +235,7 @@ fn diagnose_columns(
                 position: at(position, i),
             };
             if sample.is_finite() {
-                rows.push(Row {
-                    ts_local: at(ts_local, i),
-                    sample,
-                });
+                rows.push(Row::new(at(ts_local, i), sample));
             }
         }
         let skipped = n - rows.len();
@@ -288,7 +285,7 @@ fn read_tsv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
     let columns = py.detach(|| -> Result<_, anyhow::Error> {
         let name = path.display().to_string();
         let file = std::fs::File::open(&path)
-            .map_err(|e| propid::InputError(format!("{name}: cannot open: {e}")))?;
+            .map_err(|e| propid::InputError::invalid(format!("{name}: cannot open: {e}")))?;
         let mut reader = TsvReader::new(std::io::BufReader::with_capacity(1 << 20, file), name)?;
         // The reader keeps the header's positions, not its names: the first line, once more.
         let mut header = String::new();
@@ -325,8 +322,9 @@ fn imported<'py>(
     imported: Imported,
 ) -> PyResult<(Bound<'py, PyDict>, Vec<String>)> {
     let mut columns = row_columns(&imported.rows, [true; 6]);
-    if let Some(command) = imported.command {
-        columns.push(("command".into(), command));
+    // The stand columns the importer kept (thrust, voltage, current, command).
+    for column in &imported.stand_columns {
+        columns.push((column.name().into(), imported.stand(*column)));
     }
     Ok((columns_dict(py, columns)?, imported.assumptions))
 }
@@ -341,6 +339,7 @@ fn import_rcbench<'py>(
 ) -> PyResult<(Bound<'py, PyDict>, Vec<String>)> {
     let options = RcbenchOptions {
         subtract_zero_offset,
+        ..RcbenchOptions::default()
     };
     let result = py.detach(|| propid_io::import::import_rcbench(&path, &options));
     imported(py, result.map_err(input_error)?)

@@ -20,7 +20,7 @@ def test_names_a_hidden_torque_lag_on_a_simulated_run():
     lag = next(e for e in d.effects if e.name == "torque_lag")
     assert lag.unit == "s" and abs(lag.value - 0.012) < 0.1 * 0.012, repr(lag)
     # The extended model recovers the simulated inertia (propid sim's default J = 2e-5).
-    assert abs(d.extended.mass - 2e-5) < 0.02 * 2e-5, repr(d.extended)
+    assert abs(d.extended.inertia - 2e-5) < 0.02 * 2e-5, repr(d.extended)
 
 
 def test_a_path_and_a_dataframe_give_the_commands_diagnosis(lag_run):

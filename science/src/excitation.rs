@@ -66,7 +66,7 @@ impl core::str::FromStr for Pattern {
             .find(|p| p.name() == s)
             .ok_or_else(|| {
                 let names: Vec<_> = Pattern::ALL.iter().map(|p| p.name()).collect();
-                InputError(format!(
+                InputError::invalid(format!(
                     "unknown pattern `{s}` (one of: {})",
                     names.join(", ")
                 ))
@@ -138,7 +138,7 @@ impl Excitation {
             || self.lo < -1.0
             || self.hi > 1.0
         {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "setpoint range must satisfy -1 ≤ lo < hi ≤ 1 (got lo = {}, hi = {})",
                 self.lo, self.hi
             )));
@@ -155,7 +155,7 @@ impl Excitation {
             ),
         ] {
             if !(min_ok && v.is_finite() && v <= DAY) {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "{name} must be {} and at most {DAY} s (got {v})",
                     if name == "init duration" {
                         "≥ 0"

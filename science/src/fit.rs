@@ -29,7 +29,7 @@ use std::sync::OnceLock;
 use propid_core::estimate::{LoadBounds, LoadEstimate, LoadEstimator, SolveError};
 use serde::Serialize;
 
-use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvError, TsvReader, ALL_SLOTS};
+use propid_io::tsv::{row_of, Layout, RowError, Sample, TsvReader, Values, ALL_SLOTS};
 use propid_io::InputError;
 
 use crate::figure::{Figure, Panel, Series, Style};
@@ -71,25 +71,25 @@ impl FitOptions {
     pub fn check(&self) -> Result<(), InputError> {
         let b = self;
         if !(b.mass_min > 0.0 && b.mass_min.is_finite() && b.mass_min <= b.mass_max) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "mass bounds must satisfy 0 < mass_min ≤ mass_max (got {} and {})",
                 b.mass_min, b.mass_max
             )));
         }
         for (name, v) in [("c1_max", b.c1_max), ("c2_max", b.c2_max)] {
             if v.is_nan() || v < 0.0 {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
         }
         if let Some(d) = b.diameter {
             if !(d > 0.0 && d.is_finite()) {
-                return Err(InputError(format!(
+                return Err(InputError::invalid(format!(
                     "the propeller diameter must be a positive length in metres (got {d})"
                 )));
             }
         }
         if !(b.density > 0.0 && b.density.is_finite()) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "the air density must be positive (got {} kg/m³)",
                 b.density
             )));
@@ -101,12 +101,10 @@ impl FitOptions {
 /// Why a fit failed.
 #[derive(Debug, thiserror::Error)]
 pub enum FitError {
-    /// The data or the options cannot give a fit (the message names file, line or option).
+    /// The data or the options cannot give a fit, or the TSV is malformed or could not be read
+    /// (the error names file, line, column or option).
     #[error(transparent)]
     Input(#[from] InputError),
-    /// The TSV is malformed or could not be read.
-    #[error(transparent)]
-    Tsv(#[from] TsvError),
 }
 
 /// The result of a fit, as printed.
@@ -227,10 +225,10 @@ fn window_of(
         }
     }
     if rows == 0 {
-        return Err(InputError(format!("{name}: no data rows after the header")).into());
+        return Err(InputError::invalid(format!("{name}: no data rows after the header")).into());
     }
     let (Some(start), Some(end)) = (run_start, run_end) else {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{name}: no row has finite t, force, velocity and acceleration"
         ))
         .into());
@@ -269,7 +267,7 @@ pub fn fit_path_with(
 ) -> Result<(FitReport, Vec<Sample>), FitError> {
     options.check()?;
     let name = path.display().to_string();
-    let file = File::open(path).map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
+    let file = File::open(path).map_err(|e| InputError::os(name.clone(), "cannot open", &e))?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let map = if size == 0 {
         None
@@ -278,7 +276,7 @@ pub fn fit_path_with(
         // the file while it is mapped would make a read fault (SIGBUS); that is the caveat
         // every memory-mapping reader accepts, and the file is read once, start to end.
         let map = unsafe { memmap2::Mmap::map(&file) }
-            .map_err(|e| InputError(format!("{name}: cannot map: {e}")))?;
+            .map_err(|e| InputError::os(name.clone(), "cannot map", &e))?;
         // Read-ahead hint (Unix only; elsewhere the OS's default is fine).
         #[cfg(unix)]
         let _ = map.advise(memmap2::Advice::Sequential);
@@ -316,6 +314,8 @@ fn fit_bytes(
     let reader = TsvReader::new(data, name)?;
     let layout = reader.layout().clone();
     let header_len = reader.bytes_read() as usize;
+    // A last row without a line end was cut while the file was written: not fitted, announced.
+    let (data, cut) = propid_io::tsv::without_cut_line(data, header_len);
     let size = data.len() as u64;
     let pieces = scan::split(data, header_len, chunks);
     let done = AtomicU64::new(header_len as u64);
@@ -351,8 +351,13 @@ fn fit_bytes(
     let mut chunks = Vec::with_capacity(results.len());
     let (mut line_base, mut row_base) = (vec![], vec![]);
     let (mut lines, mut rows, mut complete) = (1u64, 0u64, 0u64);
+    let mut copies = (0u64, None);
     for r in results {
         let c = r.map_err(|(line, e)| e.at(name, lines + line))?;
+        copies.0 += c.copies.0;
+        if copies.1.is_none() {
+            copies.1 = c.copies.1.map(|l| lines + l);
+        }
         line_base.push(lines);
         row_base.push(rows);
         lines += c.lines;
@@ -361,10 +366,10 @@ fn fit_bytes(
         chunks.push(c);
     }
     if rows == 0 {
-        return Err(InputError(format!("{name}: no data rows after the header")).into());
+        return Err(InputError::invalid(format!("{name}: no data rows after the header")).into());
     }
     let Some(last_chunk) = chunks.iter().rposition(|c| c.run_rows > 0) else {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{name}: no row has finite t, force, velocity and acceleration"
         ))
         .into());
@@ -396,6 +401,40 @@ fn fit_bytes(
     let run_rows: u64 = parts.iter().map(|k| chunks[*k].run_rows).sum();
     let last = run_start + run_rows - 1;
     let first = run_start + (0.1 * (last - run_start) as f64) as u64;
+    let notes = |mut report: FitReport| {
+        if cut {
+            report
+                .warnings
+                .push(propid_io::tsv::cut_line_note(name, lines + 1));
+        }
+        if let (n @ 1.., Some(first)) = copies {
+            report
+                .warnings
+                .push(propid_io::tsv::copies_note(name, n, first));
+        }
+        report
+    };
+    // A slow sensor (a load cell logged in one row of ten, NaN between) leaves the complete rows
+    // one or two at a time, and the seed's window — the last run of them — a sample or two.
+    // Then the complete rows are fitted instead, as diagnose uses them.
+    let runs: u64 = chunks.iter().map(|c| c.runs).sum();
+    if 2 * runs > complete && 2 * run_rows < complete {
+        let sparse = Sparse {
+            rows,
+            complete,
+            run_rows,
+        };
+        let (report, kept) = fit_sparse(
+            data,
+            header_len,
+            &layout,
+            name,
+            options,
+            sparse,
+            want_samples,
+        )?;
+        return Ok((notes(report), kept));
+    }
     let window = Window {
         first,
         last,
@@ -428,7 +467,7 @@ fn fit_bytes(
     let estimator = total.unwrap_or_default();
     let n = last - first + 1;
     // Rows of the window, in order, with their line numbers.
-    let window_rows = |convert: u8, f: &mut dyn FnMut(u64, &[f64; 6])| {
+    let window_rows = |convert: u16, f: &mut dyn FnMut(u64, &Values)| {
         let (offset, line, skip) = start;
         walk(data, offset, skip, n, &layout, convert, |l, v| {
             f(line + l - 1, v)
@@ -447,7 +486,7 @@ fn fit_bytes(
             return Err(overflow_error(name, line, &s).into());
         }
     }
-    let report = report_of(&estimator, options, window, name)?;
+    let report = notes(report_of(&estimator, options, window, name)?);
     let mut kept = Vec::new();
     if want_samples {
         let keep_every = (n / 4000).max(1);
@@ -462,6 +501,82 @@ fn fit_bytes(
     Ok((report, kept))
 }
 
+/// What [`fit_sparse`] needs to know of the file's first pass.
+struct Sparse {
+    rows: u64,
+    complete: u64,
+    run_rows: u64,
+}
+
+/// The fit of a file whose complete rows come one or two at a time (a slow sensor): every
+/// complete row after the seed's 10 % cut (of the complete rows), in one more pass, with a
+/// warning that says so.
+fn fit_sparse(
+    data: &[u8],
+    from: usize,
+    layout: &Layout,
+    name: &str,
+    options: &FitOptions,
+    sparse: Sparse,
+    want_samples: bool,
+) -> Result<(FitReport, Vec<Sample>), FitError> {
+    let first = (0.1 * (sparse.complete - 1) as f64) as u64;
+    let keep_every = ((sparse.complete - first) / 4000).max(1);
+    let mut estimator = LoadEstimator::new();
+    let (mut row, mut complete, mut first_row, mut last_row) = (0u64, 0u64, 0u64, 0u64);
+    let mut overflow = None;
+    let mut kept = Vec::new();
+    scan::lines(data, from, data.len(), |line, bytes, _| {
+        // Every line parsed without error in the first pass.
+        let Ok(Some(v)) = layout.parse_line_converting(bytes, ALL_SLOTS) else {
+            return true;
+        };
+        row += 1;
+        if scan::incomplete(&v).is_some() {
+            return true;
+        }
+        complete += 1;
+        if complete <= first {
+            return true;
+        }
+        if complete == first + 1 {
+            first_row = row - 1;
+        }
+        last_row = row - 1;
+        estimator.update(v[2], v[3], v[4]);
+        if overflow.is_none() && !sums_finite(&estimator) {
+            overflow = Some((line + 1, row_of(&v).sample));
+        }
+        if want_samples && (complete - 1 - first) % keep_every == 0 {
+            kept.push(row_of(&v).sample);
+        }
+        true
+    });
+    if let Some((line, s)) = overflow {
+        return Err(overflow_error(name, line, &s).into());
+    }
+    let window = Window {
+        first: first_row,
+        last: last_row,
+        rows: sparse.rows,
+        complete: sparse.complete,
+        run_start: first_row,
+        breaker: None,
+    };
+    let mut report = report_of(&estimator, options, window, name)?;
+    report.warnings.insert(
+        0,
+        format!(
+            "{name}: only {} of {} rows have t, force, velocity and acceleration, and they come one or two at a time (a slow sensor such as a load cell, NaN between its samples): the seed's window, the last run of complete rows, would hold {} row(s); fitted instead are the {} complete rows after the seed's 10 % cut, as diagnose uses them",
+            sparse.complete,
+            sparse.rows,
+            sparse.run_rows,
+            sparse.complete - first
+        ),
+    );
+    Ok((report, kept))
+}
+
 /// Calls `f(local line, values)` for `rows` rows after the first `skip` rows from `offset`
 /// (blank lines skipped; the rows were parsed once already, so none fails; the skipped ones are
 /// not parsed again), converting the slots in `convert` ([`Layout::parse_line_converting`]).
@@ -471,8 +586,8 @@ fn walk(
     skip: u64,
     rows: u64,
     layout: &Layout,
-    convert: u8,
-    mut f: impl FnMut(u64, &[f64; 6]),
+    convert: u16,
+    mut f: impl FnMut(u64, &Values),
 ) {
     let (mut skip, mut left) = (skip, rows);
     if left == 0 {
@@ -501,7 +616,7 @@ fn sums_finite(estimator: &LoadEstimator<f64>) -> bool {
 
 /// The error for the row at which the sums stop being finite.
 fn overflow_error(name: &str, line: u64, s: &Sample) -> InputError {
-    InputError(format!(
+    InputError::invalid(format!(
         "{name}: line {line}: the sums of squares overflow a 64-bit float at this row \
          (force {:e}, velocity {:e}, acceleration {:e}): a value this large is not a measurement; \
          remove the row or rescale the data",
@@ -521,12 +636,13 @@ fn report_of(
 ) -> Result<FitReport, InputError> {
     let n = estimator.count() as u64;
     if n < 10 {
-        return Err(InputError(format!(
-            "{name}: only {n} usable samples after trimming (rows {}..={} of {}); at least 10 are needed",
+        return Err(InputError::cannot_judge(format!(
+            "only {n} usable samples after trimming (rows {}..={} of {}); at least 10 are needed",
             window.first + 1,
             window.last + 1,
             window.rows
-        )));
+        ))
+        .in_file(name));
     }
     // An infinite c1_max or c2_max means "unbounded": the bound rows are `c·θ₀ ≤ θ` and an
     // infinite coefficient makes them NaN, so a finite stand-in far beyond any physical drag is
@@ -540,26 +656,29 @@ fn report_of(
     };
     let names = ["force", "velocity", "velocity·|velocity|"];
     let est: LoadEstimate<f64> = estimator.estimate(&bounds).map_err(|e| match e {
-        SolveError::NoExcitation { regressor } => InputError(format!(
-            "{name}: `{}` is zero in every sample: the data cannot identify {}",
+        SolveError::NoExcitation { regressor } => InputError::cannot_judge(format!(
+            "`{}` is zero in every sample: the data cannot identify {}",
             names[regressor],
             ["the mass", "c1", "c2"][regressor]
-        )),
-        SolveError::TooFewSamples => InputError(format!("{name}: too few samples")),
-        SolveError::Singular => InputError(format!(
-            "{name}: the regressors are linearly dependent: the excitation does not identify mass, c1 and c2"
-        )),
-        SolveError::Infeasible => InputError(format!("{name}: the bounds admit no solution")),
+        ))
+        .in_file(name),
+        SolveError::TooFewSamples => InputError::cannot_judge("too few samples".into()).in_file(name),
+        SolveError::Singular => InputError::cannot_judge(
+            "the regressors are linearly dependent: the excitation does not identify mass, c1 and c2".into(),
+        )
+        .in_file(name),
+        SolveError::Infeasible => InputError::invalid(format!("{name}: the bounds admit no solution")),
     })?;
     if est.condition_number.is_nan() || est.condition_number >= UNIDENTIFIABLE_CONDITION {
-        return Err(InputError(format!(
-            "{name}: cannot judge: the data cannot identify the mass, c1 and c2 (condition number \
+        return Err(InputError::cannot_judge(format!(
+            "the data cannot identify the mass, c1 and c2 (condition number \
              {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}..={} \
              (e.g. a constant velocity); record with a torque that varies the speed",
             est.condition_number,
             window.first + 1,
             window.last + 1
-        )));
+        ))
+        .in_file(name));
     }
     let mut warnings = Vec::new();
     if let Some((line, column)) = window.breaker {
@@ -582,6 +701,12 @@ fn report_of(
             "poor excitation (condition number {:.3e}): the data can hardly identify {}",
             est.condition_number,
             ["mass", "c1", "c2"][worst]
+        ));
+    }
+    if est.at_bound[0] {
+        warnings.push(format!(
+            "the mass sits on its bound ({:e}): these data do not identify it, and its standard error of 0 is not a precision (steady plateaus, or a force too slow for the dynamics: `propid diagnose` fits the steady-state drag law then)",
+            est.mass
         ));
     }
     let at_bound = ["mass", "c1", "c2"]

@@ -29,6 +29,7 @@ pub mod excitation;
 pub mod figure;
 pub mod fit;
 pub mod plan;
+pub mod propulsion;
 pub mod stand;
 
 pub use propid_io::InputError;

@@ -18,6 +18,7 @@
 use propid_core::estimate::{LoadBounds, LoadEstimator};
 use serde::{Deserialize, Serialize};
 
+use crate::diagnose::{Design, EffectKind};
 use crate::excitation::{Excitation, Pattern};
 use crate::stand::{simulate, StandConfig};
 use crate::InputError;
@@ -83,7 +84,7 @@ impl Prior {
     pub fn check(&self) -> Result<(), InputError> {
         self.stand().validate()?;
         if self.c2.is_nan() || self.c2 <= 0.0 {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "the prior's c2 must be positive (got {}): a plan needs some drag to aim at",
                 self.c2
             )));
@@ -148,8 +149,8 @@ impl Precision {
 /// Whether a pattern tells two candidate effects apart.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Separation {
-    /// The two effects (diagnose's names).
-    pub effects: (String, String),
+    /// The two effects.
+    pub effects: (EffectKind, EffectKind),
     /// |correlation| of their regressors under the pattern.
     pub correlation: f64,
     /// True when the pattern can tell them apart.
@@ -194,14 +195,14 @@ pub struct Plan {
     pub candidates: Vec<Candidate>,
 }
 
-/// The effect pairs that diagnose confuses on poor excitation, with the regressor each adds to
-/// the acceleration equation.
-fn effect_pairs() -> [(&'static str, &'static str); 4] {
+/// The effect pairs that diagnose confuses on poor excitation.
+fn effect_pairs() -> [(EffectKind, EffectKind); 4] {
+    use EffectKind::*;
     [
-        ("coulomb_friction", "torque_lag"),
-        ("coulomb_friction", "viscous_friction"),
-        ("coulomb_friction", "braking_torque"),
-        ("torque_lag", "acceleration_lag"),
+        (CoulombFriction, TorqueLag),
+        (CoulombFriction, ViscousFriction),
+        (CoulombFriction, BrakingTorque),
+        (TorqueLag, AccelerationLag),
     ]
 }
 
@@ -246,22 +247,11 @@ fn separations(f: &[f64], w: &[f64], dt: f64) -> Vec<Separation> {
             (acc[b] - acc[a]) / (dt * (b - a).max(1) as f64)
         })
         .collect();
-    let regressor = |name: &str| -> Vec<f64> {
-        match name {
-            "coulomb_friction" => w.iter().map(|v| v.signum()).collect(),
-            "viscous_friction" => w.to_vec(),
-            // A braking torque: −B·sgn ω while the rotor slows. On a pattern that slows half the
-            // time and never rests, it is half a Coulomb friction plus a term in sgn(a).
-            "braking_torque" => w
-                .iter()
-                .zip(&acc)
-                .map(|(v, a)| if a * v < 0.0 { v.signum() } else { 0.0 })
-                .collect(),
-            // A first-order torque lag L: felt = F − L·Ḟ.
-            "torque_lag" => df.clone(),
-            // An acceleration lag L: true = a + L·ȧ.
-            _ => jerk.clone(),
-        }
+    let design = Design {
+        force_rate: &df,
+        speed: w,
+        acceleration: &acc,
+        jerk: &jerk,
     };
     // Residualise on the base regressors (F, ω|ω|) by least squares.
     let base: [Vec<f64>; 2] = [f.to_vec(), w.iter().map(|v| v * v.abs()).collect()];
@@ -279,15 +269,16 @@ fn separations(f: &[f64], w: &[f64], dt: f64) -> Vec<Separation> {
     };
     effect_pairs()
         .iter()
-        .map(|(a, b)| {
-            let ra = residualise(regressor(a));
-            let rb = residualise(regressor(b));
+        .filter_map(|&(a, b)| {
+            // The regressor each adds to the acceleration equation (see its candidate).
+            let ra = residualise(a.design_column(&design)?);
+            let rb = residualise(b.design_column(&design)?);
             let correlation = pearson(&ra, &rb).abs();
-            Separation {
-                effects: (a.to_string(), b.to_string()),
+            Some(Separation {
+                effects: (a, b),
                 correlation,
                 separable: correlation < SEPARABLE_BELOW,
-            }
+            })
         })
         .collect()
 }
@@ -305,7 +296,7 @@ pub fn evaluate(
         est.update(s.force, s.velocity, s.acceleration);
     }
     let e = est.estimate(&LoadBounds::default()).map_err(|_| {
-        InputError(format!(
+        InputError::invalid(format!(
             "the {} pattern does not identify the load (the regressors are degenerate)",
             excitation.pattern
         ))
@@ -343,18 +334,18 @@ pub fn design(
 ) -> Result<Plan, InputError> {
     prior.check()?;
     if !(constraints.max_duration > 0.0 && constraints.max_duration.is_finite()) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the longest duration must be positive (got {} s)",
             constraints.max_duration
         )));
     }
     if let Some(s) = constraints.max_speed.filter(|s| s.is_nan() || *s <= 0.0) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the largest speed must be positive (got {s} rad/s)"
         )));
     }
     if let Some(t) = target_rel_stderr.filter(|t| !(*t > 0.0 && *t < 1.0)) {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "the target relative standard error must be in (0, 1) (got {t})"
         )));
     }
@@ -407,8 +398,9 @@ pub fn design(
         .filter(|c| c.allowed)
         .min_by(|a, b| cost(&a.precision).total_cmp(&cost(&b.precision)))
         .ok_or_else(|| {
-            InputError(
-                "no pattern stays within the speed limit at this setpoint range: lower hi".into(),
+            InputError::invalid(
+                "no pattern stays within the speed limit at this setpoint range: lower hi"
+                    .to_string(),
             )
         })?
         .clone();
@@ -450,7 +442,7 @@ pub fn to_file(plan: &Plan) -> String {
 /// Reads a pattern file: the excitation to play, checked.
 pub fn excitation_from_file(text: &str, name: &str) -> Result<Excitation, InputError> {
     let plan: Plan = serde_json::from_str(text).map_err(|e| {
-        InputError(format!(
+        InputError::invalid(format!(
             "{name}: line {}, column {}: not a propid plan ({e})",
             e.line(),
             e.column()
@@ -458,7 +450,7 @@ pub fn excitation_from_file(text: &str, name: &str) -> Result<Excitation, InputE
     })?;
     plan.excitation
         .validate()
-        .map_err(|e| InputError(format!("{name}: {}", e.0)))?;
+        .map_err(|e| InputError::invalid(format!("{name}: {e}")))?;
     Ok(plan.excitation)
 }
 
@@ -503,7 +495,7 @@ mod tests {
         .unwrap();
         let find = |s: &[Separation]| {
             s.iter()
-                .find(|x| x.effects == ("coulomb_friction".into(), "torque_lag".into()))
+                .find(|x| x.effects == (EffectKind::CoulombFriction, EffectKind::TorqueLag))
                 .unwrap()
                 .clone()
         };
@@ -607,6 +599,6 @@ mod tests {
             plan.excitation
         );
         let e = excitation_from_file("{\n  \"prior\": 3\n}", "p.json").unwrap_err();
-        assert!(e.0.starts_with("p.json: line 2"), "{e}");
+        assert!(e.to_string().starts_with("p.json: line 2"), "{e}");
     }
 }

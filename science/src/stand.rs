@@ -4,10 +4,12 @@
 //! ## How data flows
 //! ```text
 //!  Excitation (init at hi, then sine | steps | chirp)  ──► setpoint ∈ [−1, 1]
-//!  Drive: setpoint × max torque = commanded torque ──► [torque lag] ──► torque the load feels
+//!  Drive: setpoint × max torque = commanded torque ──► [torque lag] [second-order stage]
+//!         ──► torque the load feels, − [braking] while the rotor slows past a threshold
 //!  Load (propid_core::plant): J, c1, c2, p, Coulomb, ripple  (+ an optional periodic disturbance)
 //!  Sensors, sampled at `rate` with timestamp jitter:
-//!    force        = commanded torque, or the felt torque through [force-sensor lag]   (+ noise)
+//!    force        = commanded torque, or the motor's torque through [force-sensor lag]
+//!                   (+ [offset]) (+ noise)
 //!    velocity     = ω (+ noise);   acceleration = dω/dt through [acceleration lag] (+ noise)
 //!    position     = θ wrapped to [0, 2π)
 //!  ──► tsv::Row (ts_local, t, force, velocity, acceleration, position)
@@ -25,6 +27,9 @@ use propid_io::tsv::{Row, Sample};
 use propid_io::InputError;
 
 use crate::excitation::Excitation;
+
+mod drivetrain;
+pub use drivetrain::{Drivetrain, DrivetrainConfig, DrivetrainSample, Electrical};
 
 /// Everything about the simulated stand.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
@@ -51,6 +56,19 @@ pub struct StandConfig {
     pub force_sensor_lag: f64,
     /// Lag of the reported acceleration behind the true one [s].
     pub acceleration_lag: f64,
+    /// Natural frequency of a second-order stage between the commanded torque and the torque the
+    /// load feels [Hz] (0: none).
+    pub second_order_hz: f64,
+    /// Its damping.
+    pub second_order_damping: f64,
+    /// What the reported force reads when no torque acts [N·m].
+    pub force_offset: f64,
+    /// A torque braking the rotor while it slows, which the reported force does not show [N·m].
+    pub braking: f64,
+    /// Deceleration beyond which the drive brakes [rad/s²] (it releases below `braking_off`).
+    pub braking_on: f64,
+    /// Deceleration below which the drive releases the brake [rad/s²].
+    pub braking_off: f64,
     /// Amplitude of an external periodic torque disturbance [N·m] (not a modelled effect).
     pub disturbance: f64,
     /// Its frequency [Hz].
@@ -82,6 +100,12 @@ impl Default for StandConfig {
             torque_lag: 0.0,
             force_sensor_lag: 0.0,
             acceleration_lag: 0.0,
+            second_order_hz: 0.0,
+            second_order_damping: std::f64::consts::FRAC_1_SQRT_2,
+            force_offset: 0.0,
+            braking: 0.0,
+            braking_on: 50.0,
+            braking_off: 20.0,
             disturbance: 0.0,
             disturbance_hz: 7.0,
             rate: 500.0,
@@ -104,7 +128,9 @@ impl StandConfig {
         ];
         for (name, v) in positive {
             if !(v > 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be positive (got {v})")));
+                return Err(InputError::invalid(format!(
+                    "{name} must be positive (got {v})"
+                )));
             }
         }
         let non_negative = [
@@ -114,6 +140,11 @@ impl StandConfig {
             ("torque_lag", self.torque_lag),
             ("force_sensor_lag", self.force_sensor_lag),
             ("acceleration_lag", self.acceleration_lag),
+            ("second_order_hz", self.second_order_hz),
+            ("second_order_damping", self.second_order_damping),
+            ("braking", self.braking),
+            ("braking_on", self.braking_on),
+            ("braking_off", self.braking_off),
             ("noise_force", self.noise_force),
             ("noise_velocity", self.noise_velocity),
             ("noise_acceleration", self.noise_acceleration),
@@ -121,8 +152,14 @@ impl StandConfig {
         ];
         for (name, v) in non_negative {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(InputError(format!("{name} must be ≥ 0 (got {v})")));
+                return Err(InputError::invalid(format!("{name} must be ≥ 0 (got {v})")));
             }
+        }
+        if !self.force_offset.is_finite() {
+            return Err(InputError::invalid(format!(
+                "force_offset must be finite (got {})",
+                self.force_offset
+            )));
         }
         Ok(())
     }
@@ -155,9 +192,15 @@ pub struct Stand {
     time: f64,
     setpoint: f64,
     torque_actuator: FirstOrderLag<f64>,
+    /// The second-order stage's output and its rate.
+    stage: (f64, f64),
+    /// Whether the drive is braking.
+    braking: bool,
     force_sensor: FirstOrderLag<f64>,
     acceleration_sensor: FirstOrderLag<f64>,
     rng: StdRng,
+    /// Thrust and motor, when simulated ([`Stand::with_drivetrain`]).
+    drivetrain: Option<Drivetrain>,
 }
 
 fn normal(sigma: f64) -> Normal<f64> {
@@ -172,11 +215,27 @@ impl Stand {
             time: 0.0,
             setpoint: 0.0,
             torque_actuator: FirstOrderLag::new(config.torque_lag, 0.0),
+            stage: (0.0, 0.0),
+            braking: false,
             force_sensor: FirstOrderLag::new(config.force_sensor_lag, 0.0),
             acceleration_sensor: FirstOrderLag::new(config.acceleration_lag, 0.0),
             rng: StdRng::seed_from_u64(seed),
             config,
+            drivetrain: None,
         }
+    }
+
+    /// Simulates a thrust cell and the motor's electrical side too (seeded from `seed`, apart
+    /// from the stand's own noise: no other column changes).
+    pub fn with_drivetrain(mut self, config: DrivetrainConfig, seed: u64) -> Self {
+        self.drivetrain = Some(Drivetrain::new(config, seed));
+        self
+    }
+
+    /// What the stand logs beside the drive's feedback now (`None` without a drivetrain).
+    pub fn measure_drivetrain(&mut self) -> Option<DrivetrainSample> {
+        let (omega, torque) = (self.load.velocity, self.motor_torque());
+        self.drivetrain.as_mut().map(|d| d.measure(omega, torque))
     }
 
     /// The configuration.
@@ -203,16 +262,20 @@ impl Stand {
         self.load.velocity
     }
 
-    /// The torque the motor produces (the command, through the torque lag if any).
+    /// The torque the motor produces (the command, through the torque lag or the second-order
+    /// stage if any).
     fn motor_torque(&self) -> f64 {
-        if self.config.torque_lag > 0.0 {
+        if self.config.second_order_hz > 0.0 {
+            self.stage.0
+        } else if self.config.torque_lag > 0.0 {
             self.torque_actuator.value
         } else {
             self.setpoint * self.config.max_torque
         }
     }
 
-    /// The torque the load feels: the motor's plus the external disturbance.
+    /// The torque the load feels: the motor's, minus braking while it acts, plus the external
+    /// disturbance.
     fn felt_torque(&self) -> f64 {
         let c = &self.config;
         let disturbance = if c.disturbance != 0.0 {
@@ -220,7 +283,55 @@ impl Stand {
         } else {
             0.0
         };
-        self.motor_torque() + disturbance
+        let braking = if self.braking {
+            -c.braking * self.load.velocity.signum()
+        } else {
+            0.0
+        };
+        self.motor_torque() + braking + disturbance
+    }
+
+    /// Advances the second-order stage by `dt` towards `command` (RK2: the step is far below
+    /// the stage's period).
+    fn step_stage(&mut self, dt: f64, command: f64) {
+        let c = &self.config;
+        if c.second_order_hz <= 0.0 {
+            return;
+        }
+        let wn = std::f64::consts::TAU * c.second_order_hz;
+        let f = |(y, v): (f64, f64)| {
+            (
+                v,
+                wn * wn * (command - y) - 2.0 * c.second_order_damping * wn * v,
+            )
+        };
+        let (y, v) = self.stage;
+        let k1 = f((y, v));
+        let mid = (y + 0.5 * dt * k1.0, v + 0.5 * dt * k1.1);
+        let k2 = f(mid);
+        self.stage = (y + dt * k2.0, v + dt * k2.1);
+    }
+
+    /// The drive's braking state from the load's deceleration (with hysteresis).
+    fn update_braking(&mut self, felt_without_braking: f64) {
+        let c = &self.config;
+        if c.braking <= 0.0 {
+            return;
+        }
+        let w = self.load.velocity;
+        let slowing = -self.load.acceleration(
+            felt_without_braking
+                + if self.braking {
+                    -c.braking * w.signum()
+                } else {
+                    0.0
+                },
+        ) * w.signum();
+        self.braking = if self.braking {
+            slowing > c.braking_off
+        } else {
+            slowing > c.braking_on
+        };
     }
 
     /// Advances the simulation to `t` seconds since the start.
@@ -229,12 +340,19 @@ impl Stand {
             let dt = DT.min(t - self.time);
             let command = self.setpoint * self.config.max_torque;
             self.torque_actuator.step(dt, command);
+            self.step_stage(dt, command);
             self.force_sensor.step(dt, self.motor_torque());
+            let unbraked = self.motor_torque();
+            self.update_braking(unbraked);
             let felt = self.felt_torque();
             let a = self.load.acceleration(felt);
             self.acceleration_sensor.step(dt, a);
             self.load.step(dt, felt);
             self.time += dt;
+            let (omega, torque) = (self.load.velocity, self.motor_torque());
+            if let Some(d) = &mut self.drivetrain {
+                d.step(self.time, dt, omega, torque);
+            }
         }
     }
 
@@ -246,7 +364,7 @@ impl Stand {
             self.force_sensor.value
         } else {
             command
-        };
+        } + c.force_offset;
         let acceleration = if c.acceleration_lag > 0.0 {
             self.acceleration_sensor.value
         } else {
@@ -263,7 +381,8 @@ impl Stand {
     }
 
     /// Runs the excitation (init phase not recorded, like the driver) and calls `sink` with each
-    /// recorded row.
+    /// recorded row (its stand columns filled when a drivetrain is simulated: thrust, bus
+    /// voltage and current, and the duty as `command`).
     pub fn run<E>(
         &mut self,
         excitation: &Excitation,
@@ -296,10 +415,11 @@ impl Stand {
             let mut sample = self.measure();
             sample.t = t;
             let delay = 0.002 + jitter.sample(&mut self.rng).abs();
-            sink(Row {
-                ts_local: 1000.0 + t + delay,
-                sample,
-            })?;
+            let mut row = Row::new(1000.0 + t + delay, sample);
+            if let Some(d) = self.measure_drivetrain() {
+                row.stand = d.stand();
+            }
+            sink(row)?;
         }
         Ok(n)
     }

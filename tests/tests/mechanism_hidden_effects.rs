@@ -8,10 +8,16 @@
 //! derivation error); the extended J and c2 within 2 % of what the scenario says the data hold.
 //! Seeds are drawn from a fixed seed (printed), so a failure is reproducible.
 
+mod expect;
+
+use expect::{describe, judge, say, verbose, Expected, Ties, Truth, CONSTANT_TWINS};
 use propid_io::tsv::{Row, Sample};
 use propid_mechsim::scenarios::{Bench, Expect, ExpectedEffect, Hidden, Scenario};
 use propid_mechsim::{pattern, MechConfig, Record};
-use propid_science::diagnose::{diagnose_rows, NearMiss, Options, Report, SeparatingRun, Verdict};
+use propid_science::diagnose::{
+    diagnose_rows, EffectKind, LagShape, NearMiss, Options, Report, SeparatingRun, Verdict,
+};
+use propid_science::excitation::Pattern as Drive;
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 
@@ -30,15 +36,17 @@ enum Pattern {
 fn rows(records: &[Record]) -> Vec<Row> {
     records
         .iter()
-        .map(|r| Row {
-            ts_local: r.ts_local,
-            sample: Sample {
-                t: r.t,
-                force: r.force,
-                velocity: r.velocity,
-                acceleration: r.acceleration,
-                position: r.position,
-            },
+        .map(|r| {
+            Row::new(
+                r.ts_local,
+                Sample {
+                    t: r.t,
+                    force: r.force,
+                    velocity: r.velocity,
+                    acceleration: r.acceleration,
+                    position: r.position,
+                },
+            )
         })
         .collect()
 }
@@ -67,8 +75,11 @@ fn run(s: &Scenario, p: Pattern, seed: u64) -> Report {
         Pattern::Advised(run) => {
             let (lo, hi) = (run.lo.unwrap_or(b.lo), run.hi.unwrap_or(b.hi));
             match run.pattern {
-                "steps" => s.simulate(pattern::steps(lo, hi, PERIOD), seed),
-                _ => s.simulate(pattern::chirp(lo, hi, PERIOD, b.duration), seed),
+                Drive::Steps => s.simulate(pattern::steps(lo, hi, PERIOD), seed),
+                Drive::Sine => s.simulate(pattern::sine(lo, hi, PERIOD), seed),
+                Drive::Chirp | Drive::Square | Drive::Prbs | Drive::Multisine => {
+                    s.simulate(pattern::chirp(lo, hi, PERIOD, b.duration), seed)
+                }
             }
         }
     }
@@ -76,127 +87,93 @@ fn run(s: &Scenario, p: Pattern, seed: u64) -> Report {
     diagnose_rows(rows(&records), Options::default()).expect("diagnosis runs")
 }
 
-fn describe(r: &Report) -> String {
-    let effects: Vec<String> = r
-        .effects
-        .iter()
-        .map(|e| match e.lag_form {
-            Some(form) => format!("{}={:.4e} ({form})", e.name, e.value),
-            None => format!("{}={:.4e}", e.name, e.value),
-        })
-        .collect();
-    let near: Vec<String> = r
-        .near_misses
-        .iter()
-        .map(|m| format!("{}={:.4e} ({:.2} %)", m.name, m.value, m.cv_gain_percent))
-        .collect();
-    format!(
-        "{:?} [{}] near [{}] ambiguous {:?}, J {:.4e}, c2 {:.4e}, sim {:.2} → {:.2}",
-        r.verdict,
-        effects.join(", "),
-        near.join(", "),
-        r.ambiguity.as_ref().map(|a| (a.between, a.values)),
-        r.extended.mass,
-        r.extended.c2,
-        r.simulation_rms.base,
-        r.simulation_rms.extended,
-    )
+/// The effect named `name` in propid's reports.
+fn kind(name: &str) -> EffectKind {
+    name.parse().unwrap_or_else(|e| panic!("{e}"))
 }
 
-fn say(line: String) {
-    std::io::Write::write_all(&mut std::io::stderr(), (line + "\n").as_bytes()).unwrap();
+/// The J and drag law the scenario's data hold, the drag compared by its torque at the steady
+/// speed of the middle command, inside the data: k alone is the torque at 1 rad/s, three
+/// decades below them, where an exponent read 2.1758 for 2.1723 (0.16 %) moves it by 2.6 %.
+fn truth(s: &Scenario) -> Truth {
+    let (k, p) = (s.fit.c2, s.fit.drag_exponent);
+    let mid = 0.5 * (s.bench.lo.max(0.1) + s.bench.hi) * s.bench.base.drive.max_torque;
+    Truth {
+        inertia: s.fit.inertia,
+        k,
+        p,
+        speed: (mid / k).powf(1.0 / p),
+    }
+}
+
+/// The torque shapes beside c2·ω² that a narrow band of speeds may not tell apart: a constant
+/// (friction or offset), ω and ω^p.
+const TORQUE_SHAPES: [(EffectKind, EffectKind); 6] = [
+    CONSTANT_TWINS,
+    (EffectKind::CoulombFriction, EffectKind::ViscousFriction),
+    (EffectKind::ForceOffset, EffectKind::ViscousFriction),
+    (EffectKind::ViscousFriction, EffectKind::DragExponent),
+    (EffectKind::CoulombFriction, EffectKind::DragExponent),
+    (EffectKind::ForceOffset, EffectKind::DragExponent),
+];
+
+/// The ambiguities a report may give for `effects` (on the seed's sine any pair with a named
+/// effect: a lag and a constant torque are spanned by the same harmonics): the scenarios' own
+/// stated equivalents, the constant twins on a rotor that never reverses, and the torque shapes
+/// over the band of speeds when an effect is one.
+fn ties_for(effects: &[ExpectedEffect]) -> Vec<(EffectKind, EffectKind)> {
+    let mut ties = vec![CONSTANT_TWINS];
+    for e in effects {
+        if let Some((other, _)) = e.ambiguous_with {
+            ties.push((kind(e.name), kind(other)));
+        }
+        if TORQUE_SHAPES
+            .iter()
+            .any(|(a, b)| *a == kind(e.name) || *b == kind(e.name))
+        {
+            ties.extend(TORQUE_SHAPES);
+        }
+    }
+    ties
+}
+
+/// What is wrong with report `r` for the expected `effects` on a scenario whose data hold the
+/// J and drag law `truth`, on pattern `p` (empty: right).
+fn judge_effects(effects: &[ExpectedEffect], truth: Truth, p: Pattern, r: &Report) -> Vec<String> {
+    let expected: Vec<Expected> = effects
+        .iter()
+        .map(|e| Expected {
+            kind: kind(e.name),
+            value: e.value,
+            tolerance: tolerance(e),
+        })
+        .collect();
+    let ties = ties_for(effects);
+    let ties = match p {
+        Pattern::Sine => Ties::Any,
+        _ => Ties::Only(&ties),
+    };
+    judge(r, &expected, ties, Some(truth))
 }
 
 /// What is wrong with report `r` for scenario `s` on pattern `p` (empty: right).
-fn judge(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
-    let mut bad = Vec::new();
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
+fn judge_scenario(s: &Scenario, p: Pattern, r: &Report) -> Vec<String> {
     match s.expect {
         Expect::Nothing | Expect::NotIdentifiable { .. } => {
+            let mut bad = judge(r, &[], Ties::Only(&[]), Some(truth(s)));
             if r.verdict != Verdict::NothingWrong {
-                bad.push(format!("expected nothing, got {:?} {names:?}", r.verdict));
+                bad.push(format!("expected nothing, got {:?}", r.verdict));
             }
             // Nor a hint of something: a near miss here would send the user on a needless run.
-            let near: Vec<&str> = r.near_misses.iter().map(|m| m.name).collect();
+            let near: Vec<String> = r.near_misses.iter().map(|m| m.effect.to_string()).collect();
             if !near.is_empty() {
                 bad.push(format!("expected nothing, got near misses {near:?}"));
             }
+            bad
         }
-        Expect::Effect(e) => {
-            let tolerance = tolerance(&e);
-            let found = if let Some(a) = &r.ambiguity {
-                // A rotor that never reverses (lo > 0) cannot tell a Coulomb friction from a
-                // force offset: both are one constant torque, on any pattern.
-                let constant =
-                    a.between.contains(&"coulomb_friction") && a.between.contains(&"force_offset");
-                // On the seed's sine a lag and a constant torque are spanned by the same
-                // harmonics (docs/SCIENCE.md): any ambiguity with the right one among the two.
-                let allowed = match (e.ambiguous_with, p) {
-                    (_, Pattern::Sine) => true,
-                    (Some((other, _)), _) => a.between.contains(&other),
-                    _ if constant => true,
-                    (None, _) => false,
-                };
-                // The scenario's stated equivalent stands in for the effect (a positive offset
-                // is a Coulomb friction of the same size on a rotor that never reverses).
-                let stand_in = e.ambiguous_with.map(|(other, _)| other);
-                match a
-                    .between
-                    .iter()
-                    .position(|n| *n == e.name)
-                    .or_else(|| a.between.iter().position(|n| Some(*n) == stand_in))
-                {
-                    Some(k) if allowed => Some(a.values[k]),
-                    _ => {
-                        bad.push(format!(
-                            "ambiguous {:?} where {} is expected",
-                            a.between, e.name
-                        ));
-                        None
-                    }
-                }
-            } else if names == [e.name] {
-                Some(r.effects[0].value)
-            } else {
-                bad.push(format!("named {names:?}, expected [{}]", e.name));
-                None
-            };
-            if let Some(v) = found {
-                if ((v - e.value) / e.value).abs() > tolerance {
-                    bad.push(format!(
-                        "{} = {v:.4e}, expected {:.4e} within {:.0} %",
-                        e.name,
-                        e.value,
-                        tolerance * 100.0
-                    ));
-                }
-            }
-        }
+        Expect::Effect(e) => judge_effects(&[e], truth(s), p, r),
         Expect::Unexplained { .. } => unreachable!("not drawn here"),
     }
-    if r.ambiguity.is_none() && !matches!(r.verdict, Verdict::CannotJudge { .. }) {
-        // A drag law k·|ω|^p is compared by its torque at the steady speed of the middle
-        // command, inside the data: k alone is the torque at 1 rad/s, three decades below them,
-        // where an exponent off by 0.0035 (2.1758 for 2.1723, 0.16 %) moves it by 2.6 %.
-        let j = r.extended.mass;
-        let (k, p) = (s.fit.c2, s.fit.drag_exponent);
-        let mid = 0.5 * (s.bench.lo + s.bench.hi) * s.bench.base.drive.max_torque;
-        let w = (mid / k).powf(1.0 / p);
-        let (k_hat, p_hat) = match (r.extended.k, r.extended.p) {
-            (Some(k_hat), Some(p_hat)) => (k_hat, p_hat),
-            _ => (r.extended.c2, 2.0),
-        };
-        let drag = k_hat * w.powf(p_hat) / (k * w.powf(p));
-        if (j / s.fit.inertia - 1.0).abs() > 0.02 || (drag - 1.0).abs() > 0.02 {
-            bad.push(format!(
-                "extended J {j:.4e} (expected {:.4e}), drag law {k_hat:.4e}·|ω|^{p_hat:.4} \
-                 (expected {k:.4e}·|ω|^{p:.4}: {:+.1} % at {w:.0} rad/s)",
-                s.fit.inertia,
-                (drag - 1.0) * 100.0
-            ));
-        }
-    }
-    bad
 }
 
 /// How far an estimate of `e` may be off, relatively: 10 %, plus what the scenario's own
@@ -214,9 +191,9 @@ fn near_miss_of<'r>(s: &Scenario, r: &'r Report) -> Option<&'r NearMiss> {
     let tolerance = tolerance(&e);
     (r.verdict == Verdict::NothingWrong)
         .then(|| {
-            r.near_misses
-                .iter()
-                .find(|m| m.name == e.name && ((m.value - e.value) / e.value).abs() <= tolerance)
+            r.near_misses.iter().find(|m| {
+                m.effect.name() == e.name && ((m.value - e.value) / e.value).abs() <= tolerance
+            })
         })
         .flatten()
 }
@@ -233,19 +210,19 @@ fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
             let s = h.draw(&bench(rate, p), &mut rng);
             let sim_seed = rng.random();
             let mut r = run(&s, p, sim_seed);
-            let mut bad = judge(&s, p, &r);
+            let mut bad = judge_scenario(&s, p, &r);
             // Ambiguous with the right effect among the two where the pattern should have told
             // them apart: the report advises a run that would; a user would do it, and then the
             // effect must be named alone.
             let mut advised = String::new();
-            if let Some(a) = r.ambiguity.as_ref().filter(|a| {
+            if let Some(a) = r.ambiguities.iter().find(|a| {
                 !bad.is_empty()
-                    && matches!(s.expect, Expect::Effect(e) if a.between.contains(&e.name))
+                    && matches!(s.expect, Expect::Effect(e) if a.between.contains(&kind(e.name)))
             }) {
                 let next = Pattern::Advised(a.separating_run);
                 advised = format!(" → advised `{}`", a.separating_run.flags());
                 r = run(&s, next, sim_seed);
-                bad = judge(&s, next, &r);
+                bad = judge_scenario(&s, next, &r);
             } else if let Some(m) = near_miss_of(&s, &r).filter(|_| !bad.is_empty()) {
                 // Not named, below the threshold, but listed as a near miss at the right value
                 // with the run that would show it: a user would do that run, and then the
@@ -253,7 +230,7 @@ fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
                 let next = Pattern::Advised(m.revealing_run);
                 advised = format!(" → near miss, then `{}`", m.revealing_run.flags());
                 r = run(&s, next, sim_seed);
-                bad = judge(&s, next, &r);
+                bad = judge_scenario(&s, next, &r);
             }
             let p_name = format!("{p:?}").chars().take(5).collect::<String>();
             say(format!(
@@ -267,24 +244,7 @@ fn check(hidden: &[Hidden], seed: u64, patterns: &[Pattern]) -> Vec<String> {
                     format!("WRONG: {}", bad.join("; "))
                 }
             ));
-            let verbose = std::env::var("PROPID_SWEEP_VERBOSE").ok();
-            if verbose.as_deref() == Some("all") || (!bad.is_empty() && verbose.is_some()) {
-                for c in &r.candidates {
-                    say(format!(
-                        "      {:<18} cv {:+7.2} % folds {} value {:.4e} sim {:+7.2} % {}{}",
-                        c.name,
-                        c.cv_gain_percent,
-                        c.folds_better,
-                        c.value,
-                        c.simulation_gain_percent,
-                        if c.selected { "SELECTED " } else { "" },
-                        c.note
-                    ));
-                }
-                for n in &r.notes {
-                    say(format!("      note: {n}"));
-                }
-            }
+            verbose(&r);
             failures.extend(
                 bad.into_iter()
                     .map(|b| format!("{} {p_name}{advised} {rate} Hz: {b}", h.name())),
@@ -355,13 +315,14 @@ fn mechanisms_on_steps_are_named_and_measured() {
     assert_right(&hidden, &[Pattern::Steps]);
 }
 
-/// Below the threshold: a fast velocity observer (60–80 Hz) on the sine, and a held load cell
-/// in 1 kHz rows on the sine, lag by 1–3.5 ms, which one 0.5 Hz sinusoid hardly shows (held-out
-/// gains of 0.8–2.9 %, under the 3 % threshold; docs/SCIENCE.md). Where nothing is named, the
-/// report must list the effect as a near miss at the right value with the run that shows it (a
-/// chirp), and that run must name it alone; on the chirp it is named directly.
+/// A fast velocity observer (60–80 Hz) on the sine, and a held load cell in 1 kHz rows on the
+/// sine, lag by 1–3.5 ms, which one 0.5 Hz sinusoid hardly shows in the acceleration equation
+/// (held-out gains of 0.8–2.9 %). The simulated velocity shows it: the lag is named, or where the
+/// data cannot tell it from a constant torque, ambiguous with one; where nothing is named, the
+/// report lists it as a near miss at the right value with the run that shows it (a chirp), and
+/// that run names it alone. On the chirp it is named directly.
 #[test]
-fn below_the_threshold_a_near_miss_points_to_the_run_that_names_it() {
+fn a_lag_below_the_equations_threshold_is_named_or_pointed_to() {
     let mut failures: Vec<String> = DRAWS
         .iter()
         .flat_map(|&seed| {
@@ -379,24 +340,24 @@ fn below_the_threshold_a_near_miss_points_to_the_run_that_names_it() {
     );
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 
-    // The route itself, on one draw where the sine names nothing (seed 1: a 69 Hz observer in
-    // 1 kHz rows): the near miss, its value, and its advice.
+    // One draw in detail (seed 1: a 69 Hz observer in 1 kHz rows): the acceleration equation
+    // gains 1.4 %, under the 3 % the selection asks, and the simulated velocity 97 %; the lag is
+    // named alone, at its value, and the text says so.
     let mut rng = StdRng::seed_from_u64(1);
     let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
     let s = Hidden::VelocityObserver.draw(&bench(rate, Pattern::Sine), &mut rng);
     let r = run(&s, Pattern::Sine, rng.random());
-    assert_eq!(r.verdict, Verdict::NothingWrong, "{}", describe(&r));
-    let m = near_miss_of(&s, &r).unwrap_or_else(|| panic!("no near miss: {}", describe(&r)));
-    assert_eq!(m.revealing_run.pattern, "chirp");
-    assert!(
-        m.cv_gain_percent >= 0.5 && m.cv_gain_percent < 3.0 && m.simulation_gain_percent > 0.0,
-        "{m:?}"
-    );
+    let bad = judge_scenario(&s, Pattern::Sine, &r);
+    assert!(bad.is_empty(), "{bad:?}: {}", describe(&r));
+    let lag = r
+        .effects
+        .iter()
+        .find(|e| e.effect == EffectKind::TorqueLag)
+        .unwrap_or_else(|| panic!("not named: {}", describe(&r)));
+    assert!(lag.cv_gain_percent < 3.0, "{}", describe(&r));
     let text = propid_science::diagnose::to_text(&r, "observer.tsv");
     assert!(
-        text.contains("Nothing is named")
-            && text.contains("torque_lag = ")
-            && !text.contains("Nothing is wrong"),
+        text.contains("torque_lag: torque_lag = ") && !text.contains("Nothing is wrong"),
         "{text}"
     );
 }
@@ -468,10 +429,13 @@ fn a_chirp_tells_a_filter_from_a_delay() {
         let s = Hidden::CurrentSenseFilter.draw(&bench(rate, Pattern::Chirp), &mut rng);
         let r = run(&s, Pattern::Chirp, rng.random());
         say(format!("seed {seed}: {}", describe(&r)));
-        let lag = r.effects.iter().find(|e| e.name == "force_sensor_lag");
+        let lag = r
+            .effects
+            .iter()
+            .find(|e| e.effect == EffectKind::ForceSensorLag);
         assert_eq!(
             lag.and_then(|e| e.lag_form),
-            Some("first_order"),
+            Some(LagShape::FirstOrder),
             "seed {seed}: {}",
             describe(&r)
         );
@@ -488,11 +452,16 @@ fn a_lag_earns_nothing_for_smoothing_the_force() {
         let mut rng = StdRng::seed_from_u64(seed);
         let s = Hidden::Clean.draw(&bench(1000.0, Pattern::Sine), &mut rng);
         let r = run(&s, Pattern::Sine, rng.random());
-        for c in &r.candidates {
+        // (Effects measured from the rows, the clock, have no held-out gain.)
+        for c in r
+            .candidates
+            .iter()
+            .filter(|c| c.cv_gain_percent.is_finite())
+        {
             assert!(
                 c.cv_gain_percent < 1.0,
                 "seed {seed}: {} gains {:.2} % on clean data ({})",
-                c.name,
+                c.effect,
                 c.cv_gain_percent,
                 describe(&r)
             );
@@ -552,6 +521,195 @@ fn draws_that_were_wrong_are_right() {
     for (hidden, seed, was) in fixed {
         for bad in check(&[hidden], seed, &[Pattern::Sine, Pattern::Chirp]) {
             failures.push(format!("seed {seed} (was: {was}): {bad}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Two mechanisms at once on one bench: `a` drawn on it, `b` drawn on the stand `a` made, the
+/// current sense's filter and offset merged where both set them. What a right diagnosis reports
+/// is both scenarios' effects, and the J and drag law of the last (which sees the first's).
+fn combined(
+    a: Hidden,
+    b: Hidden,
+    bench: &Bench,
+    rng: &mut StdRng,
+) -> (Scenario, Vec<ExpectedEffect>) {
+    use propid_mechsim::config::TorqueReport;
+    let first = a.draw(bench, rng);
+    let mut second = b.draw(
+        &Bench {
+            base: first.config,
+            ..*bench
+        },
+        rng,
+    );
+    if let (
+        TorqueReport::Current {
+            filter: fa,
+            offset: oa,
+            ..
+        },
+        TorqueReport::Current {
+            filter: fb,
+            offset: ob,
+            noise,
+        },
+    ) = (first.config.sensing.torque, second.config.sensing.torque)
+    {
+        second.config.sensing.torque = TorqueReport::Current {
+            filter: fa.max(fb),
+            offset: oa + ob,
+            noise,
+        };
+    }
+    let effects = [first.expect, second.expect]
+        .into_iter()
+        .filter_map(|e| match e {
+            Expect::Effect(e) => Some(e),
+            _ => None,
+        })
+        .collect();
+    (second, effects)
+}
+
+/// Two mechanisms at once on the mechanism-level stand, on a chirp, 100–1000 Hz: both found
+/// jointly, each within 10 % (plus the scenarios' derivation error), the extended J and drag law
+/// within 2 % of what the data hold.
+#[test]
+fn two_mechanisms_at_once_are_found_jointly_on_a_chirp() {
+    let failures = two_mechanisms(20261202, Pattern::Chirp);
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The same on the seed's sine: a table of what diagnose gets right and wrong there; asserts
+/// nothing.
+#[test]
+#[ignore = "an exploration aid: the seed's sine cannot separate every pair; prints, asserts nothing"]
+fn two_mechanisms_at_once_on_the_seeds_sine() {
+    say(two_mechanisms(20261202, Pattern::Sine).join("\n"));
+}
+
+/// The pairs of mechanisms on pattern `p`, drawn from generator seed `seed`: what is wrong with
+/// each.
+fn two_mechanisms(seed: u64, p: Pattern) -> Vec<String> {
+    say(format!(
+        "two mechanisms at once on the {p:?} (rng seed {seed}):"
+    ));
+    let mut rng = StdRng::seed_from_u64(seed);
+    // (name, first, second, lo): a pattern that reverses the rotor (lo = −0.5, the run diagnose
+    // advises to tell a Coulomb friction from an offset), one that reaches low speeds for two
+    // torque shapes (lo = 0.02: over 800–2450 rad/s an exponent and an offset are nearly one
+    // curve with a viscous term and a friction), the seed's lo = 0.1 otherwise.
+    let pairs = [
+        (
+            "lag + offset",
+            Hidden::CurrentSenseFilter,
+            Hidden::ForceOffset,
+            0.1,
+        ),
+        (
+            "lag + viscous",
+            Hidden::CurrentLoopDemand,
+            Hidden::Viscous,
+            0.1,
+        ),
+        (
+            "lag + coulomb, reversing",
+            Hidden::CurrentLoopDemand,
+            Hidden::Stribeck,
+            -0.5,
+        ),
+        (
+            "drag exponent + offset",
+            Hidden::ReynoldsDrag,
+            Hidden::ForceOffset,
+            0.02,
+        ),
+        (
+            "braking + lag",
+            Hidden::Braking,
+            Hidden::CurrentLoopDemand,
+            0.1,
+        ),
+        (
+            "sensor filter + drag exponent",
+            Hidden::CurrentSenseFilter,
+            Hidden::ReynoldsDrag,
+            0.1,
+        ),
+    ];
+    let mut failures = Vec::new();
+    {
+        for (name, a, b, lo) in pairs {
+            let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
+            let bench = Bench {
+                lo,
+                ..bench(rate, p)
+            };
+            let reverse = lo < 0.0;
+            let (mut s, effects) = combined(a, b, &bench, &mut rng);
+            if reverse {
+                // A plain Coulomb friction: the Stribeck dip, invisible at stand speeds, is not
+                // when the rotor reverses (the scenario's expected value is F_c without it).
+                s.config.rotor.bearing.breakaway = 0.0;
+            }
+            let sim_seed = rng.random();
+            if std::env::var("PROPID_ONLY").is_ok_and(|o| !name.contains(o.as_str())) {
+                continue;
+            }
+            let r = run(&s, p, sim_seed);
+            let bad = judge_effects(&effects, truth(&s), p, &r);
+            let p_name = format!("{p:?}");
+            say(format!(
+                "  {name:<30} {p_name:<5} {rate} Hz truth [{}]: {} {}",
+                effects
+                    .iter()
+                    .map(|e| format!("{}={:.4e}", e.name, e.value))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                describe(&r),
+                if bad.is_empty() { "ok" } else { "WRONG" }
+            ));
+            verbose(&r);
+            failures.extend(
+                bad.into_iter()
+                    .map(|b| format!("{name} {p_name} {rate} Hz: {b}")),
+            );
+        }
+    }
+    failures
+}
+
+/// A load transient — a raised-cosine bump of 4 mN·m for 3 s, its peak ten times the reported
+/// acceleration's noise (J·a = 2·10⁻⁵ kg·m² × 20 rad/s²), its mean five — early in a 120 s run
+/// (t = 15 s) and at t = 70 s (outside the held-out last 30 % that was searched before):
+/// reported as unexplained, localised in a window of time that holds it, nothing named.
+#[test]
+fn a_load_transient_is_unexplained_and_localised_in_time() {
+    use propid_mechsim::config::Disturbance;
+    let mut failures = Vec::new();
+    for (start, seed) in [(15.0, 1u64), (70.0, 2)] {
+        let mut b = bench(500.0, Pattern::Sine);
+        b.duration = 120.0;
+        let mut s = Hidden::Clean.draw(&b, &mut StdRng::seed_from_u64(seed));
+        s.config.disturbance = Disturbance::Bump {
+            amplitude: 0.004,
+            start,
+            width: 3.0,
+        };
+        let r = run(&s, Pattern::Sine, seed);
+        say(format!("  bump at {start} s: {}", describe(&r)));
+        verbose(&r);
+        let c = r.concentration.as_ref();
+        let held = c.is_some_and(|c| {
+            c.condition == propid_science::diagnose::Condition::TimeWindow
+                && c.from_s <= start + 1.0
+                && c.to_s >= start + 2.0
+                && c.to_s - c.from_s <= 10.0
+        });
+        if !held || r.verdict != Verdict::Unexplained || !r.effects.is_empty() {
+            failures.push(format!("bump at {start} s: {}", describe(&r)));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

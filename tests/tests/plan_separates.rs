@@ -2,25 +2,27 @@
 //! Coulomb friction cannot be told from a torque lag, and on the planned pattern it is named,
 //! alone, with its magnitude; a hidden torque lag is named on the planned pattern too.
 
-use propid_science::diagnose::{diagnose, Options};
+use propid_science::diagnose::{diagnose, EffectKind, Options};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::plan::{design, Constraints, Prior};
 use propid_science::stand::{simulate, StandConfig};
 
-/// The effects named, or — when the diagnosis reports two candidates as ambiguous — both, each
-/// with its estimate.
+/// The effects named and — where the diagnosis reports another as ambiguous with one of them —
+/// that other too, each with its estimate.
 fn named(samples: &[propid_io::tsv::Sample]) -> Vec<(String, f64)> {
     let report = diagnose(samples, Options::default()).expect("diagnosable");
-    if let Some(a) = &report.ambiguity {
-        return (0..2)
-            .map(|k| (a.between[k].to_string(), a.values[k]))
-            .collect();
-    }
-    report
+    let mut out: Vec<(String, f64)> = report
         .effects
         .iter()
-        .map(|e| (e.name.to_string(), e.value))
-        .collect()
+        .map(|e| (e.effect.to_string(), e.value))
+        .collect();
+    out.extend(
+        report
+            .ambiguities
+            .iter()
+            .map(|a| (a.between[1].to_string(), a.values[1])),
+    );
+    out
 }
 
 /// Coulomb friction named with its magnitude: alone, or beside a constant torque offset, which it
@@ -59,8 +61,8 @@ fn the_planned_pattern_names_coulomb_friction_where_the_sine_cannot() {
     let inseparable: Vec<String> = plan
         .separations
         .iter()
-        .filter(|s| !s.separable && s.effects.0 == "coulomb_friction")
-        .map(|s| s.effects.1.clone())
+        .filter(|s| !s.separable && s.effects.0 == EffectKind::CoulombFriction)
+        .map(|s| s.effects.1.to_string())
         .collect();
     assert!(
         !inseparable.iter().any(|e| e == "torque_lag"),

@@ -4,7 +4,7 @@
 
 use propid_io::import::{import_autoquad, import_rcbench, Imported, RcbenchOptions};
 use propid_io::tsv::Sample;
-use propid_science::diagnose::{diagnose, Options, Report};
+use propid_science::diagnose::{diagnose, Condition, Decision, Options, Report};
 
 fn data(path: &str) -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -53,10 +53,10 @@ fn rcbench_drag_law_table() {
     // (run, samples, p, p s.e., held-out gain %, c2 / 1e-8) as printed.
     let table = [
         ("2019-11-05_171350", 670, 1.964, 0.025, 0.3, 5.97),
-        ("2019-11-07_174807", 632, 2.072, 0.026, 1.2, 5.92),
+        ("2019-11-07_174807", 633, 2.071, 0.026, 1.2, 5.92),
         ("2019-11-07_175456", 817, 2.051, 0.023, 0.6, 5.91),
-        ("2019-11-07_184325", 584, 1.956, 0.028, 0.4, 5.90),
-        ("2019-11-07_211050", 558, 1.976, 0.020, 0.3, 5.97),
+        ("2019-11-07_184325", 585, 1.956, 0.028, 0.4, 5.90),
+        ("2019-11-07_211050", 559, 1.976, 0.020, 0.3, 5.97),
         ("2019-11-09_181347", 605, 1.994, 0.023, 0.0, 5.79),
     ];
     // README.md: "exponent 1.96–2.07, standard errors 0.020–0.028".
@@ -66,9 +66,9 @@ fn rcbench_drag_law_table() {
         x.iter()
             .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)))
     };
-    assert_eq!(span(&ps), (1.956, 2.072));
+    assert_eq!(span(&ps), (1.956, 2.071));
     assert_eq!(span(&ses), (0.020, 0.028));
-    let (mut c2s, mut sigmas) = (Vec::new(), Vec::new());
+    let (mut c2s, mut zs) = (Vec::new(), Vec::new());
     let (mut torque_dt, mut rpm_rate) = (Vec::new(), Vec::new());
     for (run, n, p, se, gain, c2) in table {
         let (imported, r) = rcbench(run);
@@ -91,9 +91,11 @@ fn rcbench_drag_law_table() {
             law.exponent,
             law.exponent_stderr
         );
-        assert!(law.cv_gain_percent < 3.0 && !law.selected && r.effects.is_empty());
+        assert!(
+            law.cv_gain_percent < 3.0 && law.decision != Decision::Named && r.effects.is_empty()
+        );
         c2s.push(law.c2);
-        sigmas.push((law.exponent - 2.0).abs() / law.exponent_stderr);
+        zs.push((law.exponent - 2.0).abs() / law.exponent_stderr);
         // The rates: the torque's median sample interval, the rpm's median change interval.
         let q: Vec<f64> = imported
             .rows
@@ -112,6 +114,11 @@ fn rcbench_drag_law_table() {
         }
         rpm_rate.push(1.0 / median(changes));
     }
+    // "The exponent is 2 within three standard errors in every run (0.3 to 2.7 of them)".
+    let (zlo, zhi) = span(&zs);
+    eprintln!("exponent - 2 in standard errors: {zlo} .. {zhi}");
+    printed("fewest standard errors from 2", zlo, 0.3, 1);
+    printed("most standard errors from 2", zhi, 2.7, 1);
     // "c2 agrees across three motors and four ESCs within ±1.6 %: c2 = 5.9·10⁻⁸, C_Q ≈ 0.011".
     let (lo, hi) = c2s
         .iter()
@@ -129,10 +136,6 @@ fn rcbench_drag_law_table() {
     printed("torque interval max [ms]", thi * 1e3, 163.0, 0);
     printed("torque rate min [Hz]", 1.0 / thi, 6.1, 1);
     printed("torque rate max [Hz]", 1.0 / tlo, 6.7, 1);
-    // "The exponent is 2 within three standard errors in every run (0.3 to 2.7 of them)".
-    let (slo, shi) = span(&sigmas);
-    printed("closest to 2 [s.e.]", slo, 0.3, 1);
-    printed("farthest from 2 [s.e.]", shi, 2.7, 1);
     let (rlo, rhi) = rpm_rate
         .iter()
         .fold((f64::MAX, f64::MIN), |(l, h), &c| (l.min(c), h.max(c)));
@@ -144,132 +147,140 @@ fn rcbench_drag_law_table() {
 /// The electrical rpm's change rates across the six runs as docs/REAL_DATA.md prints them.
 const RPM_RATE: (f64, f64) = (41.0, 142.0);
 
-/// What docs/REAL_DATA.md §2 prints about diagnose on one ESC32 log.
-struct Diagnosed {
-    /// The base model's J [1e-5 kg·m²] and c2 [1e-8 N·m·s²/rad²].
-    base: (f64, f64),
-    /// The named effects: name, value and standard error in the unit printed (ms, mN·m).
-    named: &'static [(&'static str, f64, f64)],
-    /// Held-out simulated-velocity RMS, base → extended [rad/s], and the gain [%].
-    simulation: (f64, f64, f64),
-    /// The extended model's J [1e-5] and c2 [1e-8].
-    extended: (f64, f64),
-    /// How far the extended c2 reads below the load cell's on the same motor and ESC [%].
-    c2_below_load_cell: f64,
-}
-
-/// docs/REAL_DATA.md §2: diagnose on an ESC32 log, every figure as printed. `load_cell` is the
-/// RCbenchmark log of the same motor and ESC.
-fn check_diagnosed(name: &str, kv: f64, load_cell: &str, p: Diagnosed) -> Report {
-    let (imported, r) = autoquad(name, kv);
+/// The ESC32 F40 log, as the selection over combinations reads it (docs/REAL_DATA.md §3). Before
+/// it (one effect at a time, a 3 % threshold on the acceleration equation, a veto from the
+/// simulation) diagnose named a 57.1 ms force-sensor lag and 6.09 mN·m of braking (simulated
+/// velocity 38.1 % better). Scored by both held-out errors fold by fold, a 3.57 mN·m constant
+/// torque explains the held-out simulation far better (76.9 % against 20.1 %) and the data cannot
+/// separate it from an 80 ms force-sensor lag; braking is no better than the constant, which is
+/// simpler. J depends on the choice (1.80·10⁻⁵ with the constant, 3.75·10⁻⁵ with the lag): the
+/// report says so, with the run that would separate them.
+#[test]
+fn esc32_f40_a_constant_torque_or_a_telemetry_lag() {
+    use propid_science::diagnose::{EffectKind, Verdict};
+    let (imported, r) = autoquad("f40_steps_5-2", 1600.0);
     assert!(imported.assumptions.iter().any(|a| a.contains("Kt")));
-    printed(&format!("{name}: base J"), r.base.mass * 1e5, p.base.0, 2);
-    printed(&format!("{name}: base c2"), r.base.c2 * 1e8, p.base.1, 2);
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    let expected: Vec<&str> = p.named.iter().map(|n| n.0).collect();
-    assert_eq!(names, expected, "{name}");
-    for (&(what, value, stderr), e) in p.named.iter().zip(&r.effects) {
-        let (scale, decimals) = match what {
-            "force_sensor_lag" => (1e3, 1),
-            _ => (1e3, 2),
-        };
-        printed(&format!("{name}: {what}"), e.value * scale, value, decimals);
-        printed(
-            &format!("{name}: {what} s.e."),
-            e.stderr * scale,
-            stderr,
-            decimals,
-        );
-    }
-    let s = &r.simulation_rms;
-    printed(&format!("{name}: base RMS"), s.base, p.simulation.0, 1);
+    assert_eq!(r.verdict, Verdict::Ambiguous);
+    let names: Vec<EffectKind> = r.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(names, [EffectKind::CoulombFriction], "{names:?}");
+    // The seed's model and the extended one, as docs/REAL_DATA.md §2 states them.
+    printed("seed J [1e-5]", r.base.inertia * 1e5, 2.92, 2);
+    printed("seed c2 [1e-8]", r.base.c2 * 1e8, 5.55, 2);
     printed(
-        &format!("{name}: extended RMS"),
-        s.extended,
-        p.simulation.1,
+        "seed simulation RMS [rad/s]",
+        r.simulation_rms.base,
+        58.5,
         1,
     );
-    printed(&format!("{name}: gain"), s.gain_percent, p.simulation.2, 1);
     printed(
-        &format!("{name}: extended J"),
-        r.extended.mass * 1e5,
-        p.extended.0,
+        "extended simulation RMS [rad/s]",
+        r.simulation_rms.extended,
+        29.5,
+        1,
+    );
+    printed("extended c2 [1e-8]", r.extended.c2 * 1e8, 5.35, 2);
+    printed("constant torque [mN·m]", r.effects[0].value * 1e3, 3.57, 2);
+    let lag = r
+        .ambiguities
+        .iter()
+        .find(|a| a.between[1] == EffectKind::ForceSensorLag)
+        .expect("ambiguous with a force-sensor lag");
+    printed("the lag [ms]", lag.values[1] * 1e3, 79.9, 1);
+    assert!(lag.agreed.is_none(), "{lag:?}");
+    printed(
+        "J with the constant [1e-5]",
+        r.extended.inertia * 1e5,
+        1.80,
         2,
     );
     printed(
-        &format!("{name}: extended c2"),
-        r.extended.c2 * 1e8,
-        p.extended.1,
+        "J with the lag [1e-5]",
+        lag.alternative.inertia * 1e5,
+        3.75,
         2,
     );
-    let (_, cell) = rcbench(load_cell);
-    let law = cell.steady_state.as_ref().expect("steady-state drag law");
     printed(
-        &format!("{name}: c2 below the load cell's"),
-        100.0 * (1.0 - r.extended.c2 / law.c2),
-        p.c2_below_load_cell,
+        "simulation gain [%]",
+        r.simulation_rms.gain_percent,
+        49.6,
         1,
     );
-    r
-}
-
-#[test]
-fn esc32_f40_diagnosed() {
-    check_diagnosed(
-        "f40_steps_5-2",
-        1600.0,
-        "2019-11-05_171350",
-        Diagnosed {
-            base: (2.92, 5.55),
-            named: &[
-                ("force_sensor_lag", 57.1, 1.1),
-                ("braking_torque", 6.09, 0.17),
-            ],
-            simulation: (58.5, 36.2, 38.1),
-            extended: (2.84, 5.39),
-            c2_below_load_cell: 9.8,
-        },
+    assert!(r
+        .ambiguities
+        .iter()
+        .any(|a| a.between == [EffectKind::CoulombFriction, EffectKind::ForceOffset]));
+    // The inertia of a 7-inch propeller and an outrunner rotor: 1e-5 .. 1e-4 kg·m², either way.
+    assert!(
+        (1e-5..1e-4).contains(&r.extended.inertia)
+            && (1e-5..1e-4).contains(&lag.alternative.inertia),
+        "J {} or {}",
+        r.extended.inertia,
+        lag.alternative.inertia
     );
 }
 
-/// The ESC32 F60 log: after the first extension (the telemetry lag) the remaining held-out error
-/// is not explained by any candidate; diagnose says so and where it sits (docs/REAL_DATA.md §2).
+/// The ESC32 F60 log (docs/REAL_DATA.md §3). Before the selection over combinations diagnose
+/// named a 64.5 ms force-sensor lag alone (8.3 % better simulated velocity) and put half of the
+/// remaining held-out error in t = 92.5–95.1 s. Now: a 2.68 mN·m constant torque and a 24.1 ms
+/// force-sensor delay, both better on held-out folds, yet the model fitted on the first 70 %
+/// simulates the last 30 % worse than the seed's (−53 %): that stretch holds the log's one step
+/// to full duty and the drop from it, which no other stretch resembles; the remaining error sits
+/// in t = 94.1–97.0 s, the drop (6.2 times the rest's), unexplained.
 #[test]
-fn esc32_f60_diagnosed_and_the_rest_localized() {
-    use propid_science::diagnose::Verdict;
-    let r = check_diagnosed(
-        "esc32v3_f60-1",
-        1750.0,
-        "2019-11-07_184325",
-        Diagnosed {
-            base: (3.51, 5.28),
-            named: &[("force_sensor_lag", 64.5, 1.5)],
-            simulation: (59.3, 54.4, 8.3),
-            extended: (4.01, 5.28),
-            c2_below_load_cell: 10.6,
-        },
+fn esc32_f60_remaining_error_is_localized() {
+    use propid_science::diagnose::{EffectKind, Verdict};
+    let (_, r) = autoquad("esc32v3_f60-1", 1750.0);
+    let names: Vec<EffectKind> = r.effects.iter().map(|e| e.effect).collect();
+    assert_eq!(
+        names,
+        [EffectKind::CoulombFriction, EffectKind::ForceSensorLag],
+        "{names:?}"
     );
-    assert_eq!(r.verdict, Verdict::Unexplained);
+    printed("seed J [1e-5]", r.base.inertia * 1e5, 3.51, 2);
+    printed(
+        "seed simulation RMS [rad/s]",
+        r.simulation_rms.base,
+        59.3,
+        1,
+    );
+    printed(
+        "extended simulation RMS [rad/s]",
+        r.simulation_rms.extended,
+        90.7,
+        1,
+    );
+    printed("extended J [1e-5]", r.extended.inertia * 1e5, 1.77, 2);
+    printed("extended c2 [1e-8]", r.extended.c2 * 1e8, 5.13, 2);
+    printed("constant torque [mN·m]", r.effects[0].value * 1e3, 2.68, 2);
+    printed("delay [ms]", r.effects[1].value * 1e3, 24.1, 1);
+    printed(
+        "simulation gain [%]",
+        r.simulation_rms.gain_percent,
+        -53.0,
+        1,
+    );
+    assert_eq!(r.verdict, Verdict::Ambiguous);
     let c = r.concentration.as_ref().expect("the error is localized");
-    assert_eq!(c.condition, "time_window");
-    printed("window from", c.from_s, 92.5, 1);
-    printed("window to", c.to_s, 95.1, 1);
-    printed("share of the error", c.error_percent, 50.0, 0);
-    printed("share of the samples", c.samples_percent, 10.0, 0);
+    assert_eq!(c.condition, Condition::TimeWindow);
+    printed("window from [s]", c.from_s, 94.1, 1);
+    printed("window to [s]", c.to_s, 97.0, 1);
+    printed("error share [%]", c.error_percent, 17.5, 1);
+    printed("ratio", c.ratio, 6.2, 1);
 }
 
-/// docs/REAL_DATA.md §4, F60: what the localized error holds. The window covers the end of the
-/// log's one step at 100 % duty and the drop to 50 % that ends it: there the rotor slows at over
-/// 8,000 rad/s² while the reported force stays positive (the braking the lagged current shows late).
-/// At full duty the force per ω² also reads 5 % low, but correcting it moves the held-out gain by
-/// under a point: that is not what the window holds.
+/// docs/REAL_DATA.md §3, F60: what the localized error holds. The window holds the end of the
+/// log's one step at 100 % duty and the drop to 50 %: there the rotor slows at over 8,000
+/// rad/s² while the reported force stays positive (braking Kt·I_bus/duty does not show). At full
+/// duty the force per ω² also reads 5 % low; corrected, the error still sits in the drop.
 #[test]
 fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     let (imported, r) = autoquad("esc32v3_f60-1", 1750.0);
-    let duty = imported
-        .command
-        .clone()
-        .expect("the ESC32 log has its duty");
+    // The duty in % (the TSV's `command` is the ratio).
+    let duty: Vec<f64> = imported
+        .stand(propid_io::tsv::StandColumn::Command)
+        .iter()
+        .map(|d| d * 100.0)
+        .collect();
     // Per duty step: its time span, mean speed and Σ F / Σ ω² (the drag law's c2 at that step).
     let step = |d: f64| {
         let rows: Vec<(f64, f64, f64)> = imported
@@ -308,11 +319,11 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
     );
     // The window starts within the full-duty step and holds the drop that ends it.
     let c = r.concentration.as_ref().expect("the error is localized");
+    // The window (a thirtieth of the record, slid by half of one) holds the drop.
     assert!(
-        c.from_s > full.0 && c.from_s < full.1,
+        c.from_s <= full.1 && c.to_s > full.1 + 0.5,
         "{c:?} against {full:?}"
     );
-    assert!(c.to_s > full.1 + 0.5, "{c:?} against {full:?}");
     // The drop: within 0.15 s of the last full-duty sample the rotor slows at over 8,000 rad/s²
     // while every reported force is positive.
     let drop: Vec<&propid_io::tsv::Row> = imported
@@ -335,7 +346,8 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
             .all(|row| !row.sample.force.is_finite() || row.sample.force > 0.0),
         "the reported force stays positive"
     );
-    // The 5 % misreading at full duty, corrected, is not what the window holds.
+    // The 5 % misreading at full duty, corrected, is not what the window holds: the error
+    // still sits in the drop.
     let mut corrected = imported.rows.clone();
     for (row, &d) in corrected.iter_mut().zip(&duty) {
         if (d - 100.0).abs() < 1e-6 {
@@ -343,17 +355,8 @@ fn esc32_f60_error_sits_in_the_drop_from_full_duty() {
         }
     }
     let fixed = diagnose(&samples(&corrected), Options::default()).unwrap();
-    printed(
-        "gain with the full-duty force corrected",
-        fixed.simulation_rms.gain_percent,
-        9.1,
-        1,
-    );
     let c = fixed.concentration.as_ref().expect("still localized");
-    assert!(
-        (c.from_s - 92.5).abs() < 0.1 && (c.to_s - 95.1).abs() < 0.1,
-        "{c:?}"
-    );
+    assert!(c.from_s <= full.1 && c.to_s > full.1 + 0.5, "{c:?}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -449,12 +452,8 @@ fn esc32(name: &str, kv: f64) -> Esc32 {
     let kt = 60.0 / (std::f64::consts::TAU * kv);
     let s: Vec<Sample> = samples(&imported.rows);
     let t: Vec<f64> = s.iter().map(|s| s.t).collect();
-    let duty: Vec<f64> = imported
-        .command
-        .unwrap()
-        .iter()
-        .map(|d| d / 100.0)
-        .collect();
+    // The duty as a ratio (the TSV's `command`).
+    let duty: Vec<f64> = imported.stand(propid_io::tsv::StandColumn::Command);
     let force: Vec<f64> = s.iter().map(|s| s.force).collect();
     let g: Vec<f64> = amps.iter().map(|i| kt * i).collect();
     let (force_rate, g_rate, amps_rate) = (

@@ -28,8 +28,10 @@
 // Matrix code reads as the algebra does: with indices.
 #![allow(clippy::needless_range_loop)]
 
+mod iv;
 mod load;
 mod normal;
 
+pub use iv::{InstrumentalEquations, IvSolution};
 pub use load::{LoadBounds, LoadEstimate, LoadEstimator};
 pub use normal::{NormalEquations, Solution, SolveError};

@@ -180,7 +180,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Diagnose.
     let (all, _) = read_samples(&tsv)?;
     let report = diagnose(&all, Default::default())
-        .map_err(|e| anyhow::anyhow!("{}: {}", tsv.display(), e.0))?;
+        .map_err(|e| anyhow::anyhow!("{}: {}", tsv.display(), e))?;
     let text = to_text(&report, &tsv.display().to_string());
     std::fs::write(args.out.join("diagnose.txt"), &text)?;
     std::fs::write(

@@ -3,10 +3,10 @@
 use std::path::PathBuf;
 
 use propid_science::diagnose::{
-    diagnose_rows_observed, read_rows, report_figure, to_text, Options, Stage, Verdict,
+    diagnose_rows_observed, report_figure, to_text, Options, Stage, Verdict,
 };
 
-use crate::{CannotJudge, InputError};
+use crate::CannotJudge;
 
 /// Output format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -65,7 +65,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar.set_message(format!("reading {}", args.file.display()));
-    let (rows, skipped) = read_rows(&args.file)?;
+    let table = propid_io::tsv::read_rows(&args.file, |row| row.sample.is_finite())?;
+    let (notes, skipped, rows) = (table.notes(), table.skipped, table.rows);
     let max_effects = args.max_effects;
     let progress = |stage: Stage| {
         bar.set_message(match stage {
@@ -78,12 +79,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let report = diagnose_rows_observed(rows, Options { max_effects }, &progress);
     bar.finish_and_clear();
-    let mut report = report.map_err(|e| InputError(format!("{}: {}", args.file.display(), e.0)))?;
+    let mut report = report.map_err(|e| e.in_file(propid_io::error::display_name(&args.file)))?;
     if skipped > 0 {
         report
             .notes
             .push(format!("{skipped} rows with missing values were skipped"));
     }
+    report.notes.extend(notes);
     let cannot_judge = match &report.verdict {
         Verdict::CannotJudge { reasons } => Some(
             reasons

@@ -302,7 +302,7 @@ impl TryFrom<Raw> for Settings {
         let until = e.given(until_stderr);
         let from_file = pattern_file.map(|path| {
             crate::cmd::sim::read_pattern_file(&path)
-                .map_err(|e| e.0)
+                .map_err(|e| e.to_string())
                 .and_then(|x| Played::try_from(x).map_err(|e| format!("{}: {e}", path.display())))
         });
         let from_file = match from_file {
@@ -456,7 +456,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             crate::cmd::telega::drive_ports(transport.as_mut(), cfg.node_id, cfg.mtu, node)?;
         let pick = |ours: Option<SubjectId>, theirs: Option<SubjectId>, name: &str, reg: &str| {
             match (ours, theirs) {
-                (Some(f), Some(t)) if f != t => Err(InputError(format!(
+                (Some(f), Some(t)) if f != t => Err(InputError::invalid(format!(
                     "--{name} {f} but drive {node} has {reg} = {t}; drop the setting or change the register with propid telega"
                 ))),
                 (_, t) => Ok(t),
@@ -481,13 +481,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             registers::TELEGA_READINESS_ID,
         )?;
         cfg.feedback_id = feedback.ok_or_else(|| {
-            InputError(format!(
+            InputError::invalid(format!(
                 "drive {node} has no {} set",
                 registers::TELEGA_FEEDBACK_ID
             ))
         })?;
         cfg.setpoint_id = setpoint.ok_or_else(|| {
-            InputError(format!(
+            InputError::invalid(format!(
                 "drive {node} has no {} set",
                 registers::TELEGA_SETPOINT_ID
             ))

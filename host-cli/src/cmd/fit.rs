@@ -1,12 +1,11 @@
 //! `propid fit`: the seed regressor as a command, around [`propid_science::fit::fit_path`].
 
-use std::io::{Read, Seek, Write};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use propid_science::fit::{figure, fit_path_with, to_yaml, FitError, FitOptions};
 
-use crate::InputError;
+use propid_io::input::Mappable;
 
 /// Output format of `propid fit`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -85,40 +84,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     // Flags first: a bad bound or geometry is reported before any input is read.
     let options = args.options();
     options.check()?;
-    let from_stdin = args.file.as_deref().is_none_or(|p| p == Path::new("-"));
-    // A pipe given by name (`<(…)`, a FIFO) cannot be mapped: it is spooled like stdin.
-    let pipe = args
-        .file
-        .as_deref()
-        .filter(|p| *p != Path::new("-"))
-        .filter(|p| std::fs::metadata(p).is_ok_and(|m| !m.is_file()));
-    // Standard input is spooled to a temporary file, which is then mapped like any file.
-    let spool;
-    let path: &Path = if from_stdin || pipe.is_some() {
-        let mut tmp = tempfile::NamedTempFile::new().context("cannot create a temporary file")?;
-        let mut stdin: Box<dyn Read> = match pipe {
-            Some(p) => Box::new(
-                std::fs::File::open(p)
-                    .map_err(|e| InputError(format!("{}: cannot open: {e}", p.display())))?,
-            ),
-            None => Box::new(std::io::stdin().lock()),
-        };
-        let mut buf = vec![0u8; 1 << 16];
-        loop {
-            let n = stdin.read(&mut buf).context("reading the input")?;
-            if n == 0 {
-                break;
-            }
-            tmp.write_all(&buf[..n])
-                .context("spooling standard input")?;
-        }
-        tmp.flush()?;
-        tmp.as_file_mut().rewind()?;
-        spool = tmp;
-        spool.path()
-    } else {
-        args.file.as_deref().unwrap_or(Path::new("-"))
-    };
+    // A regular uncompressed file is mapped as it is. Anything else — standard input, a pipe
+    // (`<(…)`, a FIFO), a gzip file — is spooled through propid_io::input (decompressed, its
+    // lines bounded, so `/dev/zero` stops at once) to a temporary file, then mapped.
+    let input = Mappable::new(args.file.as_deref().unwrap_or(Path::new("-")))?;
+    let path = input.path();
     let bar = (args.progress || size_of(path) > 50 << 20).then(progress_bar);
     let mut on_progress = |done: u64, total: u64| {
         if let Some(bar) = &bar {
@@ -130,25 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    // Bad input becomes an InputError or TsvError (exit status 2), not a FitError wrapping one.
-    let result = result.map_err(|e| match e {
-        FitError::Input(e) => anyhow::Error::from(e),
-        FitError::Tsv(e) => anyhow::Error::from(e),
-    });
-    let (report, samples) = result.map_err(|e| {
-        if from_stdin || pipe.is_some() {
-            // Name standard input (or the pipe), not the spool file, in messages.
-            let shown = pipe.map_or("<stdin>".into(), |p| p.display().to_string());
-            let message = format!("{e:#}").replace(&path.display().to_string(), &shown);
-            if crate::exit_status_for(&e) == 2 {
-                InputError(message).into()
-            } else {
-                anyhow::anyhow!(message)
-            }
-        } else {
-            e
-        }
-    })?;
+    let (report, samples) = result.map_err(|FitError::Input(e)| input.rename(e))?;
     for w in &report.warnings {
         eprintln!("warning: {w}");
     }

@@ -1,9 +1,13 @@
 //! `propid import`: measured logs of other stands into propid's TSV, around [`propid_io::import`].
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::Context;
-use propid_io::import::{import_autoquad, import_rcbench, write_tsv, Imported, RcbenchOptions};
+use propid_io::import::{
+    import_autoquad_with, import_rcbench, write_tsv, Imported, RcbenchOptions,
+};
+use propid_io::output::Output;
+use propid_io::ErrorKind;
 
 /// The importers.
 #[derive(clap::Subcommand, Debug)]
@@ -15,6 +19,10 @@ pub enum Command {
         /// The motor's kv [rpm/V] (gives Kt = 60/(2π·kv) N·m/A); finite and positive.
         #[arg(long)]
         kv: f64,
+        /// Set the velocity of samples found to be glitches (a jump away and straight back) to
+        /// NaN; without it they are reported and kept.
+        #[arg(long)]
+        despike: bool,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
@@ -26,52 +34,66 @@ pub enum Command {
         /// Subtract the torque measured at zero speed (the load cell's zero offset) from every sample.
         #[arg(long)]
         subtract_zero_offset: bool,
+        /// Set the velocity of samples found to be glitches (a jump away and straight back) to
+        /// NaN; without it they are reported and kept.
+        #[arg(long)]
+        despike: bool,
         /// Output TSV (standard output if omitted).
         #[arg(short, long)]
         output: Option<PathBuf>,
     },
 }
 
-fn write(imported: &Imported, output: Option<&Path>) -> anyhow::Result<()> {
+/// Prints what the importer measured and writes the TSV.
+fn write(imported: &Imported, out: Output) -> anyhow::Result<()> {
     for a in &imported.assumptions {
         eprintln!("import: {a}");
     }
-    let out: Box<dyn std::io::Write> = match output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
-    write_tsv(imported, out).with_context(|| {
-        format!(
-            "writing {}",
-            output.map_or("standard output".into(), |p| p.display().to_string())
-        )
-    })?;
+    for w in &imported.warnings {
+        eprintln!("warning: {w}");
+    }
+    let name = out.name();
+    let out = write_tsv(imported, std::io::BufWriter::new(out))
+        .and_then(|w| w.into_inner().map_err(|e| e.into_error()))
+        .with_context(|| format!("writing {name}"))?;
+    out.finish().with_context(|| format!("writing {name}"))?;
     eprintln!("import: {} rows", imported.rows.len());
     Ok(())
 }
 
-/// Runs an importer.
+/// Runs an importer. The output goes to standard output, or to `-o FILE` through an
+/// [`AtomicOutput`](propid_io::output::AtomicOutput): checked before the input is read (never
+/// the input itself), and written whole or not at all.
 pub fn run(command: Command) -> anyhow::Result<()> {
     match command {
-        Command::Autoquad { file, kv, output } => {
-            let imported = import_autoquad(&file, kv)
-                .map_err(|e| crate::InputError(e.0.replace("kv must", "--kv must")))?;
-            write(&imported, output.as_deref())
+        Command::Autoquad {
+            file,
+            kv,
+            despike,
+            output,
+        } => {
+            let out = Output::create(output.as_deref(), &[&file])?;
+            let imported = import_autoquad_with(&file, kv, despike).map_err(|mut e| {
+                // The library checks a value; here it is a flag.
+                if let ErrorKind::Invalid(message) = &mut e.kind {
+                    *message = message.replace("kv must", "--kv must");
+                }
+                e
+            })?;
+            write(&imported, out)
         }
         Command::Rcbench {
             file,
             subtract_zero_offset,
+            despike,
             output,
-        } => write(
-            &import_rcbench(
-                &file,
-                &RcbenchOptions {
-                    subtract_zero_offset,
-                },
-            )?,
-            output.as_deref(),
-        ),
+        } => {
+            let out = Output::create(output.as_deref(), &[&file])?;
+            let options = RcbenchOptions {
+                subtract_zero_offset,
+                despike,
+            };
+            write(&import_rcbench(&file, &options)?, out)
+        }
     }
 }

@@ -56,10 +56,12 @@ fn yaml_number(text: &str, key: &str, file: &str) -> Result<f64, InputError> {
             let (k, v) = l.split_once(':')?;
             (k.trim() == key).then(|| (i, v.split('#').next().unwrap_or("").trim().to_string()))
         })
-        .ok_or_else(|| InputError(format!("{file}: no `{key}:` line (is it a propid fit?)")))
+        .ok_or_else(|| {
+            InputError::invalid(format!("{file}: no `{key}:` line (is it a propid fit?)"))
+        })
         .and_then(|(i, v)| {
             v.parse().map_err(|_| {
-                InputError(format!(
+                InputError::invalid(format!(
                     "{file}: line {}: `{key}: {v}` is not a number",
                     i + 1
                 ))
@@ -73,7 +75,7 @@ impl Args {
             (Some(path), None, None) => {
                 let name = path.display().to_string();
                 let text = std::fs::read_to_string(path)
-                    .map_err(|e| InputError(format!("{name}: cannot read: {e}")))?;
+                    .map_err(|e| InputError::invalid(format!("{name}: cannot read: {e}")))?;
                 (
                     yaml_number(&text, "mass", &name)?,
                     yaml_number(&text, "c2", &name)?,
@@ -81,7 +83,7 @@ impl Args {
             }
             (None, Some(j), Some(c2)) => (j, c2),
             _ => {
-                return Err(InputError(
+                return Err(InputError::invalid(
                     "give the prior either as --fit FIT.yaml or as --inertia and --c2".into(),
                 ))
             }
@@ -142,7 +144,10 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     let (lo, hi) = (range.lo(), range.hi());
     let prior = args.prior()?;
     if let Some(t) = args.target_stderr.filter(|t| !(*t > 0.0 && *t < 100.0)) {
-        return Err(InputError(format!("--target-stderr must be in (0, 100) % (got {t})")).into());
+        return Err(InputError::invalid(format!(
+            "--target-stderr must be in (0, 100) % (got {t})"
+        ))
+        .into());
     }
     let constraints = Constraints {
         lo,
@@ -152,7 +157,11 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     };
     let plan = design(&prior, &constraints, args.target_stderr.map(|p| p / 100.0))?;
     print(&plan);
-    std::fs::write(&args.output, to_file(&plan))
+    // Written whole, and never over the fit it was designed from.
+    let inputs: Vec<&std::path::Path> = args.fit.iter().map(|p| p.as_path()).collect();
+    let mut out = propid_io::output::AtomicOutput::create(&args.output, &inputs)?;
+    std::io::Write::write_all(&mut out, to_file(&plan).as_bytes())
+        .and_then(|()| out.commit())
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     eprintln!("plan: written to {}", args.output.display());
     Ok(())

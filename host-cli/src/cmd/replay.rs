@@ -1,11 +1,11 @@
 //! `propid replay`: a candump log back into the TSV, around [`propid_io::candump::replay`].
 
-use std::io::{BufRead, Write};
 use std::path::PathBuf;
 
 use anyhow::Context;
 use propid_core::can::RxError;
 use propid_io::candump::{replay, ReplayError, ReplayOptions, ReplaySummary};
+use propid_io::output::Output;
 
 use crate::InputError;
 
@@ -111,34 +111,33 @@ fn seen(s: &ReplaySummary) -> String {
         .join("; ")
 }
 
-/// Runs `propid replay`.
+/// Runs `propid replay`. The log is read through [`propid_io::input::open`] (gzip read through,
+/// lines bounded); the TSV goes to standard output or through an
+/// [`AtomicOutput`](propid_io::output::AtomicOutput), never over the log. A read error midway
+/// still keeps the rows before it (they are whole), then fails.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let name = args.file.display().to_string();
-    let input: Box<dyn BufRead> = if name == "-" {
-        Box::new(std::io::BufReader::new(std::io::stdin()))
-    } else {
-        let f = std::fs::File::open(&args.file)
-            .map_err(|e| InputError(format!("{name}: cannot open: {e}")))?;
-        Box::new(std::io::BufReader::new(f))
-    };
-    let out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-    };
+    let mut out = Output::create(args.output.as_deref(), &[&args.file])?;
+    let input = propid_io::input::open(&args.file)?;
+    let name = input.name().to_owned();
     let options = ReplayOptions {
         feedback_id: args.feedback_id.get(),
         source_node: args.source_node.map(|n| n.get()),
     };
-    let out_name = args
-        .output
-        .as_ref()
-        .map_or("standard output".into(), |p| p.display().to_string());
-    let summary = replay(input, &name, &options, out).map_err(|e| match e {
-        ReplayError::Write(io) => anyhow::Error::new(io).context(format!("writing {out_name}")),
-        other => other.into(),
-    })?;
+    let out_name = out.name();
+    let result = replay(input, &name, &options, std::io::BufWriter::new(&mut out));
+    let summary = match result {
+        Ok(summary) => summary,
+        Err(ReplayError::Write(io)) => {
+            return Err(anyhow::Error::new(io).context(format!("writing {out_name}")))
+        }
+        Err(other) => {
+            out.finish()
+                .with_context(|| format!("writing {out_name}"))?;
+            return Err(other.into());
+        }
+    };
+    out.finish()
+        .with_context(|| format!("writing {out_name}"))?;
     for line in describe(&summary, &name, args.feedback_id.get()) {
         eprintln!("{line}");
     }
@@ -147,7 +146,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Some(n) => format!("subject {} from node {n}", args.feedback_id),
             None => format!("subject {}", args.feedback_id),
         };
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{name}: no feedback transfers on {why}; the log has {}",
             seen(&summary)
         ))
@@ -159,7 +158,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             .iter()
             .map(|&(n, frames)| format!("node {} ({frames} frames)", node(n)))
             .collect();
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "{name}: subject {} carries feedback from several nodes: node {} (written) and {}; \
              they are not merged: choose one with --source-node",
             args.feedback_id,

@@ -11,11 +11,15 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::Context;
-use propid_science::diagnose::{diagnose, read_samples, report_figure, to_text, Options};
-use propid_science::fit::{figure, fit_path, FitOptions, FitReport};
+use std::io::Write;
+
+use propid_io::input::Mappable;
+use propid_io::output::AtomicOutput;
+use propid_io::tsv::read_rows;
+use propid_science::diagnose::{diagnose, report_figure, to_text, Options};
+use propid_science::fit::{figure, fit_path, FitError, FitOptions, FitReport};
 
 use crate::html;
-use crate::InputError;
 
 /// Arguments of `propid report`.
 #[derive(clap::Args, Debug)]
@@ -83,9 +87,19 @@ fn fit_rows(fit: &FitReport) -> Vec<Vec<String>> {
 /// Builds the report page for a recording. `reproduce` lists the commands that made the
 /// recording (shown before the commands that make the report).
 pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyhow::Result<String> {
-    let name = tsv.display().to_string();
+    build_from(&Mappable::new(tsv)?, fit_options, reproduce)
+}
+
+fn build_from(
+    input: &Mappable,
+    fit_options: &FitOptions,
+    reproduce: &[String],
+) -> anyhow::Result<String> {
+    let name = input.name().to_string();
+    let tsv = input.path();
     let mut sections = Vec::new();
-    let (fit, fit_samples) = fit_path(tsv, fit_options, &mut |_, _| {})?;
+    let (fit, fit_samples) =
+        fit_path(tsv, fit_options, &mut |_, _| {}).map_err(|FitError::Input(e)| input.rename(e))?;
     let mut s = String::from("<section><h2>Fit: the seed's model, solved exactly</h2>\n");
     s += "<p>J·dω/dt = F − c1·ω − c2·ω·|ω|, with the seed's trimming (the last complete run of rows, \
           minus its first 10 %) and bounds.</p>\n";
@@ -97,7 +111,10 @@ pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyh
     sections.push(s);
     sections.push(html::figure_section(&figure(&fit, &fit_samples), "fit"));
 
-    let (samples, skipped) = read_samples(tsv)?;
+    let table = read_rows(tsv, |row| row.sample.is_finite()).map_err(|e| input.rename(e))?;
+    let skipped = table.skipped;
+    let notes = table.notes();
+    let samples: Vec<_> = table.rows.into_iter().map(|row| row.sample).collect();
     match diagnose(&samples, Options::default()) {
         Ok(report) => {
             let text = to_text(&report, &name);
@@ -109,13 +126,16 @@ pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyh
             if skipped > 0 {
                 s += &format!("<p>{skipped} rows with missing values were skipped.</p>\n");
             }
+            for note in &notes {
+                s += &format!("<p class=\"verdict\">warning: {}</p>\n", html::escape(note));
+            }
             s += "</section>\n";
             sections.push(s);
             sections.push(html::figure_section(&report_figure(&report), "diagnose"));
         }
         Err(e) => sections.push(format!(
             "<section><h2>Diagnosis</h2><p class=\"verdict\">cannot judge: {}</p></section>\n",
-            html::escape(&e.0)
+            html::escape(&e.to_string())
         )),
     }
 
@@ -138,21 +158,25 @@ pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyh
     Ok(html::page(&format!("propid report: {name}"), &sections))
 }
 
-/// Runs `propid report`.
+/// Runs `propid report`. The page is written through an
+/// [`AtomicOutput`](propid_io::output::AtomicOutput): never over the recording itself, and
+/// whole or not at all.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    if !args.file.is_file() {
-        return Err(InputError(format!("{}: no such file", args.file.display())).into());
-    }
     let out = args
         .output
         .clone()
         .unwrap_or_else(|| args.file.with_extension("html"));
+    let input = Mappable::new(&args.file)?;
+    let mut page_file = AtomicOutput::create(&out, &[&args.file])?;
     let options = FitOptions {
         diameter: args.diameter,
         ..FitOptions::default()
     };
-    let page = build(&args.file, &options, &[])?;
-    std::fs::write(&out, page).with_context(|| format!("cannot write {}", out.display()))?;
+    let page = build_from(&input, &options, &[])?;
+    page_file
+        .write_all(page.as_bytes())
+        .and_then(|()| page_file.commit())
+        .with_context(|| format!("writing {}", out.display()))?;
     eprintln!("report written to {}", out.display());
     Ok(())
 }

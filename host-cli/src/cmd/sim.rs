@@ -7,7 +7,8 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use anyhow::Context;
-use propid_io::tsv::TsvWriter;
+use propid_io::output::Output;
+use propid_io::tsv::{StandColumn, TsvWriter};
 use propid_mechsim::{
     Braking, ConfigError, CurrentLoop, Disturbance, Field, MechConfig, MechStand, ReportNoise, Run,
     TorqueReport, TsvSink, VelocityEstimator,
@@ -117,6 +118,9 @@ pub struct Args {
     /// The mechanism-level stand's own options (boxed: they are many).
     #[command(flatten)]
     pub mech: Box<MechArgs>,
+    /// A thrust stand's instruments: thrust cell, bus voltage and current, duty.
+    #[command(flatten)]
+    pub instruments: Box<super::stand_instruments::InstrumentArgs>,
 }
 
 /// The stand simulator `propid sim` runs.
@@ -275,6 +279,7 @@ impl StandArgs {
             noise_velocity: self.noise_velocity,
             noise_acceleration: self.noise_acceleration,
             jitter: self.jitter,
+            ..StandConfig::default()
         }
     }
 }
@@ -300,7 +305,7 @@ impl Args {
 pub fn read_pattern_file(path: &std::path::Path) -> Result<Excitation, InputError> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError(format!("{name}: cannot read: {e}")))?;
+        .map_err(|e| InputError::invalid(format!("{name}: cannot read: {e}")))?;
     propid_science::plan::excitation_from_file(&text, &name)
 }
 
@@ -381,6 +386,22 @@ fn flag(field: Field) -> Option<&'static str> {
         Field::DriveCurrentLoopBandwidth => Some("--current-loop-bandwidth"),
         Field::DriveKtError => Some("--kt-error"),
         Field::DriveMaxTorque => Some("--max-torque"),
+        Field::InstrumentsBusCurrentFilter => Some("--esc-current-filter"),
+        Field::InstrumentsBusNoiseCurrent => Some("--noise-bus-current"),
+        Field::InstrumentsBusNoiseVoltage => Some("--noise-bus-voltage"),
+        Field::InstrumentsBusSourceResistance => Some("--source-resistance"),
+        Field::InstrumentsBusSourceVoltage => Some("--bus-voltage"),
+        // Set by propid itself, never from a flag.
+        Field::InstrumentsThrustCtReferenceSpeed => None,
+        // Set by propid itself, never from a flag.
+        Field::InstrumentsThrustCtSlope => None,
+        Field::InstrumentsThrustExponent => Some("--thrust-exponent"),
+        Field::InstrumentsThrustK => Some("--thrust-k"),
+        Field::InstrumentsThrustCellDamping => Some("--thrust-cell-damping"),
+        Field::InstrumentsThrustCellNaturalHz => Some("--thrust-cell-hz"),
+        Field::InstrumentsThrustCellNoise => Some("--noise-thrust"),
+        Field::InstrumentsThrustCellOffset => Some("--thrust-offset"),
+        Field::InstrumentsThrustCellRate => Some("--thrust-rate"),
         Field::LinkClockDrift => Some("--clock-drift"),
         // Set by propid itself, never from a flag.
         Field::LinkClockOffset => None,
@@ -436,14 +457,14 @@ fn input_error(e: ConfigError) -> InputError {
             field,
             requirement,
             value,
-        } => InputError(format!(
+        } => InputError::invalid(format!(
             "{} must be {requirement} (got {value})",
             name(field)
         )),
         ConfigError::Inconsistent {
             fields: [a, b],
             why,
-        } => InputError(format!("{} and {}: {why}", name(a), name(b))),
+        } => InputError::invalid(format!("{} and {}: {why}", name(a), name(b))),
     }
 }
 
@@ -455,7 +476,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
         ("--acceleration-lag", stand.acceleration_lag),
     ] {
         if v != 0.0 {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{flag} is a formula-stand effect; with --stand mechanism a lag comes from a mechanism \
                  (--current-loop-bandwidth with --report demand, --current-filter, --observer-hz, \
                  --acceleration-filter, --report load-cell)"
@@ -524,7 +545,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
     };
     c.disturbance = match (stand.disturbance != 0.0, m.bump != 0.0) {
         (true, true) => {
-            return Err(InputError(
+            return Err(InputError::invalid(
                 "--disturbance and --bump cannot be combined (one external torque at a time)"
                     .into(),
             ))
@@ -551,7 +572,7 @@ pub fn mech_config(stand: &StandArgs, m: &MechArgs) -> Result<MechConfig, InputE
     Ok(c)
 }
 
-fn run_mechanism(args: &Args, out: Box<dyn Write>) -> anyhow::Result<()> {
+fn run_mechanism(args: &Args, out: Box<dyn Write + '_>) -> anyhow::Result<()> {
     let config = mech_config(&args.stand, &args.mech)?;
     let excitation = args.excitation()?;
     excitation.validate()?;
@@ -561,7 +582,10 @@ fn run_mechanism(args: &Args, out: Box<dyn Write>) -> anyhow::Result<()> {
         duration: excitation.duration,
     };
     run.validate().map_err(input_error)?;
-    let mut sink = TsvSink::new(out, args.mech.write_setpoint)?;
+    let mut config = config;
+    args.instruments.mechanism(&mut config)?;
+    config.validate().map_err(input_error)?;
+    let mut sink = TsvSink::with_stand(out, args.mech.write_setpoint, args.instruments.any())?;
     let mut failure = None;
     let stand = MechStand::new(config, args.stand.seed).map_err(input_error)?;
     let rows = stand
@@ -591,42 +615,43 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     if args.stand_kind == StandKind::Formula {
         let changed = args.mech.changed();
         if !changed.is_empty() {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{} only apply to --stand mechanism",
                 changed.join(", ")
             ))
             .into());
         }
-    } else {
-        let out: Box<dyn Write> = match &args.output {
-            Some(p) => Box::new(std::io::BufWriter::new(
-                std::fs::File::create(p)
-                    .with_context(|| format!("cannot create {}", p.display()))?,
-            )),
-            None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
-        };
-        return run_mechanism(&args, out);
+    }
+    // Standard output, or a file written whole (never over the pattern file read).
+    let inputs: Vec<&std::path::Path> = args.pattern_file.iter().map(|p| p.as_path()).collect();
+    let mut out = Output::create(args.output.as_deref(), &inputs)?;
+    let out_name = out.name();
+    let writing = || format!("writing {out_name}");
+    if args.stand_kind != StandKind::Formula {
+        run_mechanism(&args, Box::new(std::io::BufWriter::new(&mut out)))?;
+        return out.finish().with_context(writing);
     }
     let config = args.stand.config()?;
     let excitation = args.excitation()?;
     excitation.validate()?;
-    let out: Box<dyn Write> = match &args.output {
-        Some(p) => Box::new(std::io::BufWriter::new(
-            std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
-        )),
-        None => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+    let drivetrain = args.instruments.formula()?;
+    let columns: &[StandColumn] = if drivetrain.is_some() {
+        &StandColumn::ALL
+    } else {
+        &[]
     };
-    let out_name = args
-        .output
-        .as_ref()
-        .map_or("standard output".into(), |p| p.display().to_string());
-    let writing = || format!("writing {out_name}");
-    let mut writer = TsvWriter::new(out, false).with_context(writing)?;
+    let mut writer =
+        TsvWriter::with_columns(std::io::BufWriter::new(&mut out), false, columns, &[])
+            .with_context(writing)?;
     let mut stand = Stand::new(config, args.stand.seed);
+    if let Some(d) = drivetrain {
+        stand = stand.with_drivetrain(d, args.stand.seed);
+    }
     let rows = stand
         .run(&excitation, |row| writer.write(&row))
         .with_context(writing)?;
     writer.into_inner().with_context(writing)?;
+    out.finish().with_context(writing)?;
     eprintln!(
         "simulated {rows} rows ({} s at {} Hz)",
         excitation.duration, config.rate

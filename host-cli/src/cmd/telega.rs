@@ -78,12 +78,12 @@ fn write(
         .access(drive, name, Value::Empty)
         .map_err(client_err)?
         .filter(|r| !r.value.is_empty())
-        .ok_or_else(|| InputError(format!("drive {drive} has no register {name}")))?;
+        .ok_or_else(|| InputError::invalid(format!("drive {drive} has no register {name}")))?;
     if !current.mutable {
         bail!("drive {drive}: {name} is read-only");
     }
     let value = parse_text(&current.value, text).ok_or_else(|| {
-        InputError(format!(
+        InputError::invalid(format!(
             "--set: `{text}` is not a valid {} for register {name}",
             registers::describe(&current.value)
         ))

@@ -2,8 +2,12 @@
 
 use std::path::Path;
 
-use super::{column, csv_reader, differentiate, mean_sd, number, open_csv, Imported, UpdateRate};
-use crate::tsv::{Row, Sample};
+use super::{
+    column, csv_error, csv_reader, describe_dropped, despike, differentiate, duplicates_warning,
+    find_column, mean_sd, number, open_csv, DropReason, Dropped, Imported, UpdateRate,
+};
+use crate::input::LineLimit;
+use crate::tsv::{Row, Sample, Stand, StandColumn};
 use crate::InputError;
 
 /// `YYYY-MM-DD HH:MM:SS:mmm` (the utility's PC timestamp) → seconds since the start of its day
@@ -33,9 +37,15 @@ fn pc_time(text: &str) -> Option<f64> {
 
 /// Imports an ESC32 log. `kv` [rpm/V] gives Kt = 60/(2π·kv); it must be finite and positive.
 pub fn import_autoquad(path: &Path, kv: f64) -> Result<Imported, InputError> {
+    import_autoquad_with(path, kv, false)
+}
+
+/// [`import_autoquad`], with velocity glitches set to NaN when `despike` (they are found and
+/// reported either way).
+pub fn import_autoquad_with(path: &Path, kv: f64, despike: bool) -> Result<Imported, InputError> {
     check_kv(kv)?;
     let (reader, headers, file) = open_csv(path)?;
-    autoquad(reader, headers, file, kv)
+    autoquad(reader, headers, file, kv, despike)
 }
 
 /// [`import_autoquad`] from any reader; `name` names it in messages.
@@ -46,12 +56,12 @@ pub fn read_autoquad(
 ) -> Result<Imported, InputError> {
     check_kv(kv)?;
     let (reader, headers, file) = csv_reader(Box::new(input), name.to_owned())?;
-    autoquad(reader, headers, file, kv)
+    autoquad(reader, headers, file, kv, false)
 }
 
 fn check_kv(kv: f64) -> Result<(), InputError> {
     if !kv.is_finite() || kv <= 0.0 {
-        return Err(InputError(format!(
+        return Err(InputError::invalid(format!(
             "kv must be a finite positive number of rpm/V (got {kv})"
         )));
     }
@@ -59,39 +69,63 @@ fn check_kv(kv: f64) -> Result<(), InputError> {
 }
 
 fn autoquad(
-    mut reader: csv::Reader<Box<dyn std::io::Read + '_>>,
+    mut reader: csv::Reader<LineLimit<Box<dyn std::io::Read + '_>>>,
     headers: csv::StringRecord,
     file: String,
     kv: f64,
+    remove_spikes: bool,
 ) -> Result<Imported, InputError> {
     let (stamp, _) = column(&headers, &["Timestamp"], &file)?;
     let (amps, amps_name) = column(&headers, &["Amps"], &file)?;
     let (rpm, rpm_name) = column(&headers, &["RPM"], &file)?;
     let (duty, duty_name) = column(&headers, &["Duty"], &file)?;
+    let volts = find_column(&headers, &["Batt. Volts"]);
     let kt = 60.0 / (std::f64::consts::TAU * kv);
-    // (PC time, bus current, rpm, duty in %)
-    let mut raw: Vec<(f64, f64, f64, f64)> = Vec::new();
+    // (PC time, bus current, rpm, duty in %, bus voltage)
+    let mut raw: Vec<(f64, f64, f64, f64, f64)> = Vec::new();
+    // The log's line of each row, and the lines dropped as copies of the line before them (the
+    // time is the row index, so a copy would also shift every later row's time).
+    let mut lines = Vec::new();
+    let mut dropped = Vec::new();
+    let mut previous = csv::StringRecord::new();
     for (k, record) in reader.records().enumerate() {
         let line = k as u64 + 2;
-        let record = record.map_err(|e| InputError(format!("{file}: line {line}: {e}")))?;
+        let record = record.map_err(|e| csv_error(&file, &e, line))?;
+        if k > 0 && record.iter().eq(previous.iter()) {
+            dropped.push(Dropped {
+                line,
+                reason: DropReason::Duplicate,
+            });
+            continue;
+        }
+        lines.push(line);
         let text = record.get(stamp).unwrap_or("");
         let pc = pc_time(text).ok_or_else(|| {
-            InputError(format!(
-                "{file}: line {line}, column `Timestamp`: `{text}` is not YYYY-MM-DD HH:MM:SS:mmm"
+            InputError::invalid(format!(
+                "`{}` is not YYYY-MM-DD HH:MM:SS:mmm",
+                text.chars().take(40).collect::<String>()
             ))
+            .in_file(&file)
+            .at_line(line)
+            .in_column("Timestamp")
         })?;
         raw.push((
             pc,
             number(&record, amps, &amps_name, &file, line)?,
             number(&record, rpm, &rpm_name, &file, line)?,
             number(&record, duty, &duty_name, &file, line)?,
+            match &volts {
+                Some((i, name)) => number(&record, *i, name, &file, line)?,
+                None => f64::NAN,
+            },
         ));
+        previous = record;
     }
     let n = raw.len();
     if n < 2 {
-        return Err(InputError(format!(
-            "{file}: {n} data rows; at least 2 are needed"
-        )));
+        return Err(
+            InputError::invalid(format!("{n} data rows; at least 2 are needed")).in_file(&file),
+        );
     }
     // The time base: the ESC logs at a fixed rate while the PC stamps rows in bursts, so the
     // row interval is the least-squares slope of PC time against row index.
@@ -106,9 +140,11 @@ fn autoquad(
     }
     let dt = sxy / sxx;
     if !(1e-5..=1.0).contains(&dt) {
-        return Err(InputError(format!(
-            "{file}: column `Timestamp`: the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
-        )));
+        return Err(InputError::invalid(format!(
+            "the rows are {dt} s apart on average; an ESC logs every 10 µs to 1 s"
+        ))
+        .in_file(&file)
+        .in_column("Timestamp"));
     }
     let scatter = raw
         .iter()
@@ -117,8 +153,7 @@ fn autoquad(
         .fold(0.0, f64::max);
 
     let mut rows = Vec::with_capacity(n);
-    let mut command = Vec::with_capacity(n);
-    for (k, &(_, i_bus, r, d)) in raw.iter().enumerate() {
+    for (k, &(_, i_bus, r, d, v)) in raw.iter().enumerate() {
         let d = d / 100.0;
         // Phase current ≈ I_bus / duty; undefined at zero duty.
         let force = if d > 0.0 { kt * i_bus / d } else { f64::NAN };
@@ -131,9 +166,19 @@ fn autoquad(
                 acceleration: f64::NAN,
                 position: f64::NAN,
             },
+            stand: Stand {
+                voltage: v,
+                current: i_bus,
+                command: d,
+                ..Stand::NONE
+            },
         });
-        command.push(d * 100.0);
     }
+    let mut warnings = Vec::new();
+    if !dropped.is_empty() {
+        warnings.push(duplicates_warning(dropped.len(), n + dropped.len()));
+    }
+    despike(&mut rows, &lines, &rpm_name, remove_spikes, &mut warnings);
     differentiate(&mut rows);
 
     // What the signals do, measured.
@@ -141,7 +186,7 @@ fn autoquad(
         UpdateRate::measure(
             raw.iter()
                 .enumerate()
-                .map(|(k, r)| (k as f64 * dt, [r.1, r.2, r.3][col])),
+                .map(|(k, r)| (k as f64 * dt, [r.1, r.2, r.3, r.4][col])),
         )
         .describe(n)
     };
@@ -181,9 +226,9 @@ fn autoquad(
             scatter * 1e3
         ),
         format!("torque = Kt·I_bus/duty with Kt = 60/(2π·kv) = {kt:.4e} N·m/A (nominal, from kv): phase current ≈ bus current / duty; NaN at zero duty; this torque includes the motor's own friction"),
-        format!("`{amps_name}` (bus current) {}", rate(0)),
+        format!("current = `{amps_name}` (the DC bus current the ESC reports) [A], kept as the TSV column `current`; it {}", rate(0)),
         format!("velocity = `{rpm_name}`·2π/60 (mechanical rpm from the commutation period); it {}", rate(1)),
-        format!("command = `{duty_name}` [%] (the duty the ESC applied), kept as the TSV column `command`; it {}", rate(2)),
+        format!("command = `{duty_name}` / 100 (the duty the ESC applied, logged in %), kept as the TSV column `command` (ratio 0–1); it {}", rate(2)),
         "acceleration = central difference of the velocity (no smoothing)".into(),
     ];
     assumptions.push(if steady.is_empty() {
@@ -204,9 +249,24 @@ fn autoquad(
     } else {
         "zero offset: no rows at zero speed, so the current sensor's zero cannot be checked".into()
     });
+    let mut stand_columns = vec![StandColumn::Current, StandColumn::Command];
+    match &volts {
+        Some((_, name)) => {
+            assumptions.push(format!(
+                "voltage = `{name}` (the DC bus voltage the ESC reports) [V], kept as the TSV column `voltage`; it {}",
+                rate(3)
+            ));
+            stand_columns.insert(0, StandColumn::Voltage);
+        }
+        None => assumptions.push("voltage: no `Batt. Volts` column; no voltage column".into()),
+    }
+    assumptions.extend(describe_dropped(&dropped, n + dropped.len()));
     Ok(Imported {
         rows,
-        command: Some(command),
+        stand_columns,
+        extra: Vec::new(),
         assumptions,
+        dropped,
+        warnings,
     })
 }

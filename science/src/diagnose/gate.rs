@@ -107,10 +107,10 @@ const BOUNDS: [(&str, f64); 4] = [
     ("acceleration", 1e8),
 ];
 /// Samples per fold and regression column that a held-out score needs.
-const SAMPLES_PER_COLUMN_AND_FOLD: usize = 10;
+const SAMPLES_PER_COLUMN_AND_FOLD: usize = 5;
 
-/// Samples the effects tested need: every fold of the cross-validation holds ten samples per
-/// column of the widest model.
+/// Samples the effects tested need: every fold of the cross-validation holds five samples per
+/// column of the widest model (ten folds: the fifty samples per column five folds of ten held).
 pub fn samples_needed(columns: usize) -> usize {
     super::FOLDS * SAMPLES_PER_COLUMN_AND_FOLD * columns
 }

@@ -1,234 +1,429 @@
-//! The diagnosis as text and as plots.
+//! The diagnosis as a typed value: every field a program reads, serialised by serde; the text
+//! and the plots are rendered from it (`text`).
 
-use super::{Report, Verdict};
-use crate::figure::{Figure, Panel, Series, Style};
+use serde::Serialize;
 
-/// A readable report.
-pub fn to_text(r: &Report, source: &str) -> String {
-    let mut s = String::new();
-    if let Verdict::CannotJudge { reasons } = &r.verdict {
-        s += &format!(
-            "propid diagnose {source}: {} samples over {:.1} s\n\ncannot judge: {}\n",
-            r.samples,
-            r.duration_s,
-            reasons
-                .iter()
-                .map(|w| w.to_string())
-                .collect::<Vec<_>>()
-                .join("; ")
-        );
-        for n in &r.notes {
-            s += &format!("   Note: {n}\n");
-        }
-        return s;
-    }
-    let b = &r.base;
-    s += &format!(
-        "propid diagnose {source}: {} samples over {:.1} s at {:.0} Hz\n\n",
-        r.samples, r.duration_s, r.rate_hz
-    );
-    s += "1. Base model (the seed's): J·dω/dt = F − c2·ω|ω|, c1 = 0\n";
-    s += &format!(
-        "   J  = {:.4e} ± {:.1e} kg·m²\n   c2 = {:.4e} ± {:.1e} N·m·s²/rad²\n",
-        b.mass, b.mass_stderr, b.c2, b.c2_stderr
-    );
-    s += &format!(
-        "   What the simulation gets wrong: simulated open-loop from the measured force, its velocity\n   \
-         misses the measured one by {:.3} rad/s RMS on the held-out last 30 % of the data.\n\n",
-        r.simulation_rms.base
-    );
-    s += "2. Residual of the base model, correlation with:\n";
-    for (name, c) in &r.residual_analysis.correlations {
-        s += &format!("   {name:<26} {c:+.3}\n");
-    }
-    s += &format!(
-        "   dominant frequency {:.3} Hz ({:.0}× the median of the spectrum)\n\n",
-        r.residual_analysis.dominant_frequency_hz, r.residual_analysis.peak_to_median
-    );
-    s += "3. Candidate effects (gain = held-out acceleration error, blocked 5-fold cross-validation):\n";
-    for c in &r.candidates {
-        s += &format!(
-            "   {:<18} gain {:+7.2} %  better in {}/5 folds  simulation {:+6.1} %  value {:+.4e}  {}\n",
-            c.name,
-            c.cv_gain_percent,
-            c.folds_better,
-            c.simulation_gain_percent,
-            c.value,
-            if c.selected { "← named".to_string() } else { c.note.clone() }
-        );
-    }
-    s += "\n4. Verdict\n";
-    if r.verdict == Verdict::NothingWrong && r.near_misses.is_empty() {
-        s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
-    } else if r.verdict == Verdict::NothingWrong {
-        s += &format!(
-            "   Nothing is named: no candidate reaches the {:.0} % held-out threshold, and the residual has no\n   \
-             structure left. Close to it (consistent in every fold, the simulation agreeing; evidence, not a verdict):\n",
-            super::MIN_GAIN * 100.0
-        );
-    } else if !r.near_misses.is_empty() {
-        s += "   Close to being named as well (consistent in every fold, the simulation agreeing; evidence, not a verdict):\n";
-    }
-    for m in &r.near_misses {
-        let unit = if m.unit == "1" {
-            String::new()
-        } else {
-            format!(" {}", m.unit)
-        };
-        s += &format!(
-            "     {} = {:.4e}{unit}: held-out gain {:.2} %, simulated velocity {:+.1} %\n",
-            m.name, m.value, m.cv_gain_percent, m.simulation_gain_percent
-        );
-    }
-    // The runs that would show them, each once, with the near misses it is for.
-    let mut runs: Vec<(&str, Vec<&str>)> = Vec::new();
-    for m in &r.near_misses {
-        match runs.iter_mut().find(|(look, _)| *look == m.look_with) {
-            Some((_, names)) => names.push(m.name),
-            None => runs.push((&m.look_with, vec![m.name])),
-        }
-    }
-    for (look, names) in runs {
-        s += &format!("     To see {}: {look}.\n", names.join(", "));
-    }
-    if let Some(a) = &r.ambiguity {
-        s += &format!(
-            "   Ambiguous between {} = {:.4e} {} and {} = {:.4e} {}: both explain the held-out data about\n   \
-             equally well (gains {:.2} % and {:.2} %), so neither is named. To separate them: {}.\n",
-            a.between[0], a.values[0], a.units[0], a.between[1], a.values[1], a.units[1],
-            a.cv_gain_percent[0], a.cv_gain_percent[1], a.separate_with
-        );
-    }
-    for e in &r.effects {
-        s += &format!(
-            "   {}: {} = {:.4e} ± {:.1e} {}\n     {}\n     alone it improves the simulated velocity by {:.1} % on held-out data\n",
-            e.name, e.name, e.value, e.stderr, e.unit, e.explanation, e.gain_percent
-        );
-    }
-    if !r.effects.is_empty() {
-        let x = &r.extended;
-        s += &format!(
-            "   Extended model: J = {:.4e} ± {:.1e} kg·m², c1 = {:.3e}, c2 = {:.4e} ± {:.1e}\n",
-            x.mass, x.mass_stderr, x.c1, x.c2, x.c2_stderr
-        );
-        if let (Some(k), Some(p)) = (x.k, x.p) {
-            s += &format!(
-                "   Drag law: {k:.4e}·|ω|^{p:.3} (c2 above is its quadratic equivalent at the RMS speed)\n"
-            );
-        }
-    }
-    s += &format!(
-        "   Simulated-velocity RMS error on held-out data: base {:.3} → extended {:.3} rad/s (gain {:.1} %)\n",
-        r.simulation_rms.base, r.simulation_rms.extended, r.simulation_rms.gain_percent
-    );
-    match &r.unexplained {
-        Some(u) => s += &format!("   Unexplained: {}\n", u.description),
-        None => s += "   Unexplained periodic structure: none left in the residual\n",
-    }
-    if let Some(c) = &r.concentration {
-        let at = if c.condition == "time_window" {
-            format!("between t = {:.1} s and {:.1} s", c.from_s, c.to_s)
-        } else {
-            format!("while {}", c.condition.replace('_', " "))
-        };
-        s += &format!(
-            "   Unexplained, concentrated {at}: {:.0} % of the remaining held-out error in {:.0} % of the held-out samples\n",
-            c.error_percent, c.samples_percent
-        );
-    }
-    for n in &r.notes {
-        s += &format!("   Note: {n}\n");
-    }
-    s
+use super::candidate::EffectKind;
+use super::gate::CannotJudge;
+use super::model::LagShape;
+use super::search::CandidateScore;
+use super::select::Gain;
+use super::steady::DragLaw;
+use super::structure::Concentration;
+use crate::excitation::Pattern;
+
+/// A model's seed parameters.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BaseModel {
+    /// Inertia J [kg·m²].
+    pub inertia: f64,
+    /// Viscous coefficient (0: the seed's default bound).
+    pub c1: f64,
+    /// Drag coefficient of the quadratic law c2·ω|ω| [N·m·s²/rad²], always: for a drag law
+    /// k·|ω|^p (`drag_exponent` named) it is the c2 whose quadratic torque equals k·|ω|^p at the
+    /// data's RMS speed, and `k` and `p` hold the law itself.
+    pub c2: f64,
+    /// Standard error of J.
+    pub inertia_stderr: f64,
+    /// Standard error of c2.
+    pub c2_stderr: f64,
+    /// k of a drag law k·|ω|^p [N·m·(s/rad)^p] (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub k: Option<f64>,
+    /// p of a drag law k·|ω|^p (absent for the quadratic law).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub p: Option<f64>,
 }
 
-/// The plots: measured vs simulated velocity (base and extended) on the held-out data, and the
-/// acceleration residuals.
-pub fn figure(r: &Report) -> Figure {
-    let tr = &r.traces;
-    let names: Vec<&str> = r.effects.iter().map(|e| e.name).collect();
-    let ext = if names.is_empty() {
-        "extended (= base)".to_string()
-    } else {
-        format!("base + {}", names.join(" + "))
-    };
-    Figure {
-        title: format!(
-            "propid diagnose: simulated-velocity RMS {:.3} → {:.3} rad/s ({:+.1} %)",
-            r.simulation_rms.base, r.simulation_rms.extended, -r.simulation_rms.gain_percent
-        ),
-        x_label: "t [s]".into(),
-        panels: vec![
-            Panel {
-                title: "held-out data: measured velocity vs open-loop simulation".into(),
-                y_label: "ω [rad/s]".into(),
-                series: vec![
-                    Series {
-                        name: "base model".into(),
-                        x: tr.t.clone(),
-                        y: tr.base.clone(),
-                        style: Style::Line,
-                    },
-                    Series {
-                        name: ext.clone(),
-                        x: tr.t.clone(),
-                        y: tr.extended.clone(),
-                        style: Style::Line,
-                    },
-                    Series {
-                        name: "measured".into(),
-                        x: tr.t.clone(),
-                        y: tr.measured.clone(),
-                        style: Style::Points,
-                    },
-                ],
+impl BaseModel {
+    /// A model with every value NaN (data that could not be judged).
+    pub(crate) fn unknown() -> BaseModel {
+        BaseModel {
+            inertia: f64::NAN,
+            c1: f64::NAN,
+            c2: f64::NAN,
+            inertia_stderr: f64::NAN,
+            c2_stderr: f64::NAN,
+            k: None,
+            p: None,
+        }
+    }
+
+    /// A drag law k·|ω|^p as its quadratic-equivalent c2 at the RMS speed `w_rms`.
+    pub(crate) fn power_law(mut self, k: f64, k_stderr: f64, p: f64, w_rms: f64) -> BaseModel {
+        let scale = w_rms.powf(p - 2.0);
+        self.c2 = k * scale;
+        self.c2_stderr = k_stderr * scale;
+        self.k = Some(k);
+        self.p = Some(p);
+        self
+    }
+}
+
+/// A named effect with its estimated parameter.
+#[derive(Clone, Debug, Serialize)]
+pub struct NamedEffect {
+    /// Which effect (serialised as its name, `torque_lag`, …).
+    #[serde(rename = "name")]
+    pub effect: EffectKind,
+    /// Its parameter.
+    pub value: f64,
+    /// Unit of the parameter.
+    pub unit: &'static str,
+    /// Standard error of the parameter.
+    pub stderr: f64,
+    /// Held-out simulated-velocity gain of the base model plus this effect alone [%] (fitted on
+    /// the first 70 %, simulated over the last 30 %).
+    pub gain_percent: f64,
+    /// Held-out acceleration-equation gain when it was named [%].
+    pub cv_gain_percent: f64,
+    /// The selection's criterion when it was named.
+    pub gain: Gain,
+    /// For a lag, how it acts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lag_form: Option<LagShape>,
+    /// For a lag, its delay at low frequency [s] (a first-order lag's time constant, a delay's
+    /// length, a second-order stage's 2ζ/ω_n): what every lag's value compares by.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lag_delay_s: Option<f64>,
+    /// A sentence on what it means.
+    pub explanation: String,
+}
+
+/// Simulated-velocity error on the held-out data.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimulationRms {
+    /// Base model [rad/s].
+    pub base: f64,
+    /// Extended model [rad/s].
+    pub extended: f64,
+    /// 100·(1 − extended/base).
+    pub gain_percent: f64,
+}
+
+/// Periodic structure in the residual that no candidate explains.
+#[derive(Clone, Debug, Serialize)]
+pub struct Unexplained {
+    /// What it looks like.
+    pub description: String,
+    /// Dominant frequency [Hz].
+    pub frequency_hz: f64,
+}
+
+/// A `propid drive` run that shows an effect, or tells two apart.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SeparatingRun {
+    /// `--pattern`.
+    pub pattern: Pattern,
+    /// `--lo`, when the run needs its own (a negative one reverses the rotor).
+    pub lo: Option<f64>,
+    /// `--hi`, when the run needs its own.
+    pub hi: Option<f64>,
+    /// What the run shows that these data do not.
+    pub why: &'static str,
+}
+
+impl SeparatingRun {
+    /// The advice in words: the `propid drive` command, and what it shows.
+    pub fn advice(&self) -> String {
+        format!("`propid drive {}`: {}", self.flags(), self.why)
+    }
+
+    /// The `propid drive` flags.
+    pub fn flags(&self) -> String {
+        let mut s = format!("--pattern {}", self.pattern);
+        if let Some(lo) = self.lo {
+            s += &format!(" --lo {lo}");
+        }
+        if let Some(hi) = self.hi {
+            s += &format!(" --hi {hi}");
+        }
+        s
+    }
+}
+
+/// A candidate with consistent held-out evidence below the threshold: not named, not a
+/// verdict, and where to look. Listed only when the last round of the search named nothing.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct NearMiss {
+    /// Which effect.
+    #[serde(rename = "name")]
+    pub effect: EffectKind,
+    /// Its estimate.
+    pub value: f64,
+    /// Unit of the estimate.
+    pub unit: &'static str,
+    /// Held-out acceleration gain [%].
+    pub cv_gain_percent: f64,
+    /// Held-out simulated-velocity gain [%] (positive: the simulation agrees).
+    pub simulation_gain_percent: f64,
+    /// The `propid drive` run that would show it more clearly, and why, in words.
+    pub look_with: String,
+    /// The same run as data.
+    pub revealing_run: SeparatingRun,
+}
+
+/// J and c2 that do not depend on which of two ambiguous effects is chosen.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Agreed {
+    /// Inertia [kg·m²].
+    pub inertia: f64,
+    /// Drag coefficient (its quadratic equivalent) [N·m·s²/rad²].
+    pub c2: f64,
+}
+
+/// An effect's value in a model.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct EffectValue {
+    /// Which effect.
+    #[serde(rename = "name")]
+    pub effect: EffectKind,
+    /// Its value.
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+}
+
+/// Two effects these data cannot tell apart: the first is in the extended model, the second
+/// would explain the held-out data as well.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Ambiguity {
+    /// The two effects, the one in the model first.
+    pub between: [EffectKind; 2],
+    /// Their estimates (the second from the model with it in place of the first).
+    pub values: [f64; 2],
+    /// Units of the estimates.
+    pub units: [&'static str; 2],
+    /// Held-out acceleration gains when they were tried [%].
+    pub cv_gain_percent: [f64; 2],
+    /// The extended model with the second in place of the first (its J, c2, drag law).
+    pub alternative: BaseModel,
+    /// The values of every effect of that model.
+    pub alternative_effects: Vec<EffectValue>,
+    /// J and c2 where the two models agree on them (within two standard errors or 0.5 %).
+    pub agreed: Option<Agreed>,
+    /// The `propid drive` run that would separate them, and why, in words.
+    pub separate_with: String,
+    /// The same run as data (for a program that acts on the advice).
+    pub separating_run: SeparatingRun,
+}
+
+/// A parameter of the seed's model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Parameter {
+    /// The inertia J.
+    Inertia,
+    /// The drag coefficient c2.
+    Drag,
+}
+
+impl Parameter {
+    /// Its symbol in reports.
+    pub fn symbol(self) -> &'static str {
+        match self {
+            Parameter::Inertia => "J",
+            Parameter::Drag => "c2",
+        }
+    }
+
+    /// The run that would identify it.
+    pub fn advice(self) -> &'static str {
+        match self {
+            Parameter::Inertia => "a run with larger accelerations would (`propid plan` designs one; `propid drive --pattern chirp` or `--pattern square`)",
+            Parameter::Drag => "a run over a wider range of speeds would (`propid drive --pattern steps --lo 0.02 --hi 0.9`)",
+        }
+    }
+}
+
+/// A parameter these data do not identify.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Unidentified {
+    /// Which.
+    pub parameter: Parameter,
+    /// Its estimate.
+    pub value: f64,
+    /// Its standard error (NaN or infinite when none can be computed).
+    pub stderr: f64,
+}
+
+/// Relative standard error above which a parameter is not identified.
+pub const MAX_RELATIVE_STDERR: f64 = 0.3;
+
+impl Unidentified {
+    /// The parameters of `m` that are not identified: not positive, a standard error that is not
+    /// a positive finite number, or one above [`MAX_RELATIVE_STDERR`] of the value.
+    pub(crate) fn of(m: &BaseModel) -> Vec<Unidentified> {
+        [
+            (Parameter::Inertia, m.inertia, m.inertia_stderr),
+            (Parameter::Drag, m.c2, m.c2_stderr),
+        ]
+        .into_iter()
+        .filter(|&(_, v, se)| {
+            !(v > 0.0 && se > 0.0 && se.is_finite() && se <= MAX_RELATIVE_STDERR * v)
+        })
+        .map(|(parameter, value, stderr)| Unidentified {
+            parameter,
+            value,
+            stderr,
+        })
+        .collect()
+    }
+}
+
+/// Correlations of the base model's acceleration residual with candidate explanatory signals.
+#[derive(Clone, Debug, Serialize)]
+pub struct ResidualAnalysis {
+    /// (signal name, correlation coefficient).
+    pub correlations: Vec<(&'static str, f64)>,
+    /// Frequency of the largest periodogram peak of the residual [Hz].
+    pub dominant_frequency_hz: f64,
+    /// That peak's power over the median power.
+    pub peak_to_median: f64,
+}
+
+/// What the diagnosis concludes. Code that acts on a diagnosis matches on this, never on the
+/// wording of a note.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Verdict {
+    /// No candidate improves the held-out fit, no structure is left and J and c2 are
+    /// identified: the seed's model explains these data.
+    NothingWrong,
+    /// Effects were named and no structure is left.
+    Explained,
+    /// Structure is left that no candidate explains (with or without named effects).
+    Unexplained,
+    /// Effects were named, but the data cannot tell one of them from another (see
+    /// [`Report::ambiguities`]).
+    Ambiguous,
+    /// J or c2 is not identified by these data (see [`Report::unidentified`]): whatever else
+    /// the report says, the model does not explain them.
+    NotIdentified,
+    /// The data cannot support a verdict; nothing else in the report is a conclusion.
+    CannotJudge {
+        /// Why.
+        reasons: Vec<CannotJudge>,
+    },
+}
+
+/// The diagnosis.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Samples analysed.
+    pub samples: usize,
+    /// Duration [s].
+    pub duration_s: f64,
+    /// Median sample rate [Hz].
+    pub rate_hz: f64,
+    /// The seed's model fitted to all the data.
+    pub base: BaseModel,
+    /// The named effects.
+    pub effects: Vec<NamedEffect>,
+    /// The extended model (base plus the named effects) fitted to all the data.
+    pub extended: BaseModel,
+    /// Simulated-velocity RMS before and after, on the held-out last 30 %.
+    pub simulation_rms: SimulationRms,
+    /// Periodic structure left, if any.
+    pub unexplained: Option<Unexplained>,
+    /// The residual analysis of the base model.
+    pub residual_analysis: ResidualAnalysis,
+    /// Every candidate tried, every round, with the selection's decision.
+    pub candidates: Vec<CandidateScore>,
+    /// The drag law from steady-state data, when the recording cannot identify the inertia
+    /// (then `base.inertia` is null and the simulation fields are null).
+    pub steady_state: Option<DragLaw>,
+    /// Where the remaining held-out error of the extended model concentrates, if it does.
+    pub concentration: Option<Concentration>,
+    /// Effects the data cannot tell from one that is named.
+    pub ambiguities: Vec<Ambiguity>,
+    /// Candidates that came close to being named, best first.
+    pub near_misses: Vec<NearMiss>,
+    /// Parameters of the extended model these data do not identify.
+    pub unidentified: Vec<Unidentified>,
+    /// Share of the samples near steady state (|a|/2 < 1 % of |ω|).
+    pub steady_share: f64,
+    /// Notes about the data (steady-state data, missing columns, …).
+    pub notes: Vec<String>,
+    /// Series for plots (not serialised).
+    #[serde(skip)]
+    pub traces: Traces,
+}
+
+/// Time series for the plots.
+#[derive(Clone, Debug, Default)]
+pub struct Traces {
+    /// Time of the held-out part [s].
+    pub t: Vec<f64>,
+    /// Measured velocity.
+    pub measured: Vec<f64>,
+    /// Base model, simulated open-loop.
+    pub base: Vec<f64>,
+    /// Extended model, simulated open-loop.
+    pub extended: Vec<f64>,
+    /// Time of all samples.
+    pub t_all: Vec<f64>,
+    /// Acceleration residual of the base model.
+    pub residual_base: Vec<f64>,
+    /// Acceleration residual of the extended model.
+    pub residual_extended: Vec<f64>,
+}
+
+impl Report {
+    /// A report that concludes nothing, for data the gate rejects.
+    pub(crate) fn cannot_judge(
+        samples: usize,
+        duration_s: f64,
+        reasons: Vec<CannotJudge>,
+    ) -> Report {
+        Report {
+            verdict: Verdict::CannotJudge { reasons },
+            samples,
+            duration_s,
+            rate_hz: f64::NAN,
+            base: BaseModel::unknown(),
+            effects: Vec::new(),
+            extended: BaseModel::unknown(),
+            simulation_rms: SimulationRms {
+                base: f64::NAN,
+                extended: f64::NAN,
+                gain_percent: f64::NAN,
             },
-            Panel {
-                title: "simulation error (simulated − measured)".into(),
-                y_label: "Δω [rad/s]".into(),
-                series: vec![
-                    Series {
-                        name: "base model".into(),
-                        x: tr.t.clone(),
-                        y: tr
-                            .base
-                            .iter()
-                            .zip(&tr.measured)
-                            .map(|(a, b)| a - b)
-                            .collect(),
-                        style: Style::Line,
-                    },
-                    Series {
-                        name: ext,
-                        x: tr.t.clone(),
-                        y: tr
-                            .extended
-                            .iter()
-                            .zip(&tr.measured)
-                            .map(|(a, b)| a - b)
-                            .collect(),
-                        style: Style::Line,
-                    },
-                ],
+            unexplained: None,
+            residual_analysis: ResidualAnalysis {
+                correlations: Vec::new(),
+                dominant_frequency_hz: f64::NAN,
+                peak_to_median: f64::NAN,
             },
-            Panel {
-                title: "acceleration residual (all data)".into(),
-                y_label: "[rad/s²]".into(),
-                series: vec![
-                    Series {
-                        name: "base model".into(),
-                        x: tr.t_all.clone(),
-                        y: tr.residual_base.clone(),
-                        style: Style::Points,
-                    },
-                    Series {
-                        name: "extended model".into(),
-                        x: tr.t_all.clone(),
-                        y: tr.residual_extended.clone(),
-                        style: Style::Points,
-                    },
-                ],
-            },
-        ],
+            candidates: Vec::new(),
+            steady_state: None,
+            steady_share: f64::NAN,
+            ambiguities: Vec::new(),
+            near_misses: Vec::new(),
+            unidentified: Vec::new(),
+            concentration: None,
+            notes: Vec::new(),
+            traces: Traces::default(),
+        }
+    }
+
+    /// The verdict from what the report holds, in order of what matters most to a user.
+    pub(crate) fn conclude(&mut self) {
+        if matches!(self.verdict, Verdict::CannotJudge { .. }) {
+            return;
+        }
+        self.verdict = if !self.unidentified.is_empty() {
+            Verdict::NotIdentified
+        } else if !self.ambiguities.is_empty() {
+            Verdict::Ambiguous
+        } else if self.unexplained.is_some() || self.concentration.is_some() {
+            Verdict::Unexplained
+        } else if self.effects.is_empty() {
+            Verdict::NothingWrong
+        } else {
+            Verdict::Explained
+        };
     }
 }

@@ -32,6 +32,8 @@ pub struct Signals {
     pub decelerating: Vec<bool>,
     /// Median sample rate [Hz].
     pub rate: f64,
+    /// The largest |velocity| [rad/s].
+    pub top_speed: f64,
     /// The reported acceleration's sample-to-sample noise σ [rad/s²]: from the median absolute
     /// deviation of a[i] − (a[i−1] + a[i+1])/2 (σ·√1.5 for white noise; robust to the steps a
     /// braking torque makes).
@@ -98,13 +100,13 @@ impl Signals {
     pub fn new(samples: Vec<Sample>) -> Result<Signals, InputError> {
         const MIN_SAMPLES: usize = 200;
         if samples.len() < MIN_SAMPLES {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{} complete samples; a diagnosis needs at least {MIN_SAMPLES}",
                 samples.len()
             )));
         }
         if let Some(k) = samples.windows(2).position(|w| w[1].t < w[0].t) {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "time goes backwards at sample {} (t = {} after {})",
                 k + 2,
                 samples[k + 1].t,
@@ -130,7 +132,9 @@ impl Signals {
             .filter(|d| *d > 0.0)
             .collect();
         if dts.is_empty() {
-            return Err(InputError("all samples have the same time".into()));
+            return Err(InputError::invalid(
+                "all samples have the same time".to_string(),
+            ));
         }
         let mid = dts.len() / 2;
         let rate = 1.0 / *dts.select_nth_unstable_by(mid, f64::total_cmp).1;
@@ -158,7 +162,9 @@ impl Signals {
             .count()
             * 1000
             >= n;
+        let top_speed = velocity.iter().fold(0.0f64, |m, w| m.max(w.abs()));
         Ok(Signals {
+            top_speed,
             first,
             slope_half_width: h,
             log_speed: velocity.iter().map(|w| w.abs().ln()).collect(),
@@ -214,47 +220,91 @@ impl Signals {
         self.t.len()
     }
 
-    /// The reported torque through a causal first-order lag of time constant `lag`, discretised
-    /// with a first-order hold (the torque taken as linear between samples, exact for a
-    /// continuous torque; a zero-order hold would apply each sample over the interval before it
-    /// and make every fitted lag half a sample long).
-    ///
-    /// With `steps_at_samples`, a step of the force (see [`Signals::force_steps_at`]) is taken to
-    /// happen at the sample that first shows it: the old value holds over the interval before.
-    pub fn lagged_force(&self, lag: f64, steps_at_samples: bool) -> Vec<f64> {
-        self.lagged(&self.force, lag, steps_at_samples)
+    /// `x` (one value per sample) as the load felt it if the sensor reports it `delay` seconds
+    /// late: x(tᵢ + delay), linear between samples (as the simulation takes every input), held
+    /// past the last sample.
+    pub fn advanced(&self, x: &[f64], delay: f64) -> Vec<f64> {
+        advanced(&self.t, x, delay)
     }
 
-    /// The force as the load felt it if the sensor reports it `delay` seconds late: F(tᵢ + delay),
-    /// linear between samples (as the simulation takes every input), held past the last sample.
-    pub fn advanced_force(&self, delay: f64) -> Vec<f64> {
-        advanced(&self.t, &self.force, delay)
-    }
-
-    /// [`Signals::lagged_force`] of another force column `force` (one per sample).
+    /// `force` (one value per sample) through a causal first-order lag `lag` (see
+    /// [`first_order_lag`]); with `steps_at_samples`, a step of the reported force (see
+    /// [`Signals::force_steps_at`]) is taken to happen at the sample that first shows it: the old
+    /// value holds over the interval before.
     pub fn lagged(&self, force: &[f64], lag: f64, steps_at_samples: bool) -> Vec<f64> {
-        let mut out = Vec::with_capacity(self.len());
-        if lag <= 0.0 {
-            out.extend_from_slice(force);
-            return out;
-        }
-        let mut y = force[0];
-        out.push(y);
-        for i in 1..self.len() {
-            let dt = self.t[i] - self.t[i - 1];
-            let (x0, x1) = (force[i - 1], force[i]);
-            if dt > 0.0 && steps_at_samples && self.force_steps_at(i) {
-                y = x0 + (-dt / lag).exp() * (y - x0);
-            } else if dt > 0.0 {
-                // y' = (x − y)/L with x linear from x0 to x1 over dt, solved exactly.
-                let e = (-dt / lag).exp();
-                let slope = (x1 - x0) / dt;
-                y = x1 - lag * slope + e * (y - x0 + lag * slope);
-            }
-            out.push(y);
-        }
-        out
+        first_order_lag(&self.t, force, lag, |i| {
+            steps_at_samples && self.force_steps_at(i)
+        })
     }
+}
+
+/// exp(−dt/L) for the intervals of a log, whose dt barely changes from one sample to the next:
+/// the exponential of the last interval, corrected by the series of exp(−δ/L) to third order
+/// where δ = dt − dt_last is small (error below 10⁻⁶ relative), the exponential itself
+/// otherwise. (One `exp` per sample was a tenth of a diagnosis.)
+pub(crate) struct Decay {
+    lag: f64,
+    dt: f64,
+    e: f64,
+}
+
+impl Decay {
+    /// For time constant `lag`.
+    pub fn new(lag: f64) -> Decay {
+        Decay {
+            lag,
+            dt: f64::NAN,
+            e: f64::NAN,
+        }
+    }
+
+    /// exp(−dt/lag).
+    #[inline]
+    pub fn at(&mut self, dt: f64) -> f64 {
+        let d = (dt - self.dt) / self.lag;
+        if d.abs() < 0.02 {
+            self.e * (1.0 - d * (1.0 - d * (0.5 - d / 6.0)))
+        } else {
+            self.dt = dt;
+            self.e = (-dt / self.lag).exp();
+            self.e
+        }
+    }
+}
+
+/// `x` (at times `t`) through a causal first-order lag of time constant `lag`, discretised with
+/// a first-order hold (the input linear between samples, exact for a continuous input; a
+/// zero-order hold would apply each sample over the interval before it and make every fitted lag
+/// half a sample long), except where `step_at(i)`: there the old value holds over the interval
+/// and the step happens at sample i.
+pub(crate) fn first_order_lag(
+    t: &[f64],
+    x: &[f64],
+    lag: f64,
+    step_at: impl Fn(usize) -> bool,
+) -> Vec<f64> {
+    let mut out = Vec::with_capacity(x.len());
+    if lag <= 0.0 || x.is_empty() {
+        out.extend_from_slice(x);
+        return out;
+    }
+    let mut y = x[0];
+    out.push(y);
+    let mut decay = Decay::new(lag);
+    for i in 1..x.len() {
+        let dt = t[i] - t[i - 1];
+        let (x0, x1) = (x[i - 1], x[i]);
+        if dt > 0.0 && step_at(i) {
+            y = x0 + decay.at(dt) * (y - x0);
+        } else if dt > 0.0 {
+            // y' = (x − y)/L with x linear from x0 to x1 over dt, solved exactly.
+            let e = decay.at(dt);
+            let slope = (x1 - x0) / dt;
+            y = x1 - lag * slope + e * (y - x0 + lag * slope);
+        }
+        out.push(y);
+    }
+    out
 }
 
 /// Whether `x` (noise σ `noise`) steps between samples i − 1 and i (see
@@ -352,7 +402,7 @@ impl Updates {
 /// The force `delay` seconds after each sample, F(tᵢ + delay), linear between samples and
 /// held past the last: the torque the load felt at tᵢ, if the sensor reports it `delay` late (a
 /// held or transported sample).
-fn advanced(t: &[f64], force: &[f64], delay: f64) -> Vec<f64> {
+pub(crate) fn advanced(t: &[f64], force: &[f64], delay: f64) -> Vec<f64> {
     let n = force.len();
     let mut j = 0;
     (0..n)

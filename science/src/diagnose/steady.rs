@@ -8,14 +8,23 @@
 //!  seed:     F = c2·ω² + F₀          (F₀ absorbs the load cell's zero offset)
 //!  extended: F = k·|ω|^p + F₀        (p by the held-out error: grid, then golden section)
 //! ```
-//! by 5-fold cross-validation with interleaved folds (every fifth sample), because held steps put
-//! each speed in one contiguous block. p is named (`drag_exponent`) when it lowers the held-out
-//! error by at least [`super::MIN_GAIN`] in at least four folds.
+//! by cross-validation with interleaved folds (every tenth sample in one fold), because held
+//! steps put each speed in one contiguous block. The exponent is the `drag_exponent` candidate,
+//! and it is named as every candidate is: by `select` (rules 1–4; no simulation here, so the
+//! torque equation's held-out error is the whole score).
 
 use propid_core::estimate::NormalEquations;
 
+use super::candidate::{admissible_measured, EffectKind, Estimate};
+use super::model::Effect;
+use super::report::{
+    BaseModel, NamedEffect, Report, ResidualAnalysis, SimulationRms, Traces, Unidentified,
+};
+use super::select::{judge, Decision, Evidence, FoldErrors, Gain};
 use super::signals::Signals;
-use super::{FOLDS, MIN_FOLDS_BETTER, MIN_GAIN};
+use super::tune::golden;
+use super::FOLDS;
+use propid_io::InputError;
 
 /// The fitted law.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -32,16 +41,16 @@ pub struct DragLaw {
     pub exponent_stderr: f64,
     /// k of the extended law [N·m·(s/rad)^p].
     pub k: f64,
-    /// Held-out gain of the extended law over the seed's [%].
+    /// Pooled held-out gain of the extended law over the seed's [%].
     pub cv_gain_percent: f64,
-    /// Folds in which it did better.
-    pub folds_better: usize,
+    /// The selection's criterion.
+    pub gain: Gain,
     /// RMS torque residual of the seed's law [N·m].
     pub rms_seed: f64,
     /// RMS torque residual of the extended law [N·m].
     pub rms_extended: f64,
-    /// Whether the exponent is named.
-    pub selected: bool,
+    /// What the selection decided about the exponent.
+    pub decision: Decision,
 }
 
 fn folds(s: &Signals, idx: &[usize], p: f64) -> [NormalEquations<f64, 2>; FOLDS] {
@@ -105,46 +114,119 @@ pub fn drag_law(s: &Signals) -> Option<DragLaw> {
     let idx: Vec<usize> = (0..s.len())
         .filter(|&i| s.force[i].is_finite() && s.velocity[i].abs() > 0.1 * top)
         .collect();
-    if idx.len() < 20 {
+    if idx.len() < 2 * FOLDS {
         return None;
     }
     let seed = score(s, &idx, 2.0)?;
-    let (mse2, per2, th2, rss2, n) = (seed.mse, seed.folds, seed.theta, seed.rss, seed.n);
     let cv = |p: f64| score(s, &idx, p).map_or(f64::INFINITY, |x| x.mse);
-    let grid: Vec<f64> = (0..=20).map(|k| 1.2 + 0.1 * k as f64).collect();
+    let grid = super::candidate::drag_exponent_grid();
     let scores: Vec<f64> = grid.iter().map(|&p| cv(p)).collect();
     let k = (0..grid.len()).min_by(|a, b| scores[*a].total_cmp(&scores[*b]))?;
-    let p = super::effects::golden(
+    let p = golden(
         grid[k.saturating_sub(1)],
         grid[(k + 1).min(grid.len() - 1)],
         cv,
         24,
     );
     let free = score(s, &idx, p)?;
-    let (msep, perp, thp, rssp) = (free.mse, free.folds, free.theta, free.rss);
     // Standard error of p from the curvature of the in-sample residual.
     let h = 0.01;
     let rss_at = |q: f64| score(s, &idx, q).map_or(f64::NAN, |x| x.rss);
-    let curvature = (rss_at(p + h) - 2.0 * rssp + rss_at(p - h)) / (h * h);
-    let sigma2 = rssp / (n - 3.0).max(1.0);
+    let curvature = (rss_at(p + h) - 2.0 * free.rss + rss_at(p - h)) / (h * h);
+    let sigma2 = free.rss / (free.n - 3.0).max(1.0);
     let stderr = if curvature > 0.0 {
         (2.0 * sigma2 / curvature).sqrt()
     } else {
         f64::NAN
     };
-    let gain = 1.0 - msep / mse2;
-    let wins = perp.iter().zip(&per2).filter(|(a, b)| a < b).count();
+    let kind = EffectKind::DragExponent;
+    let estimate = Estimate::new(p, stderr);
+    let errors = |x: &Score| FoldErrors {
+        equation: x.folds,
+        simulation: None,
+    };
+    let evidence = Evidence {
+        effect: kind,
+        parameters: kind.candidate().parameters(),
+        estimate,
+        admissible: admissible_measured(kind, estimate),
+        errors: errors(&free),
+        simulation_sees: false,
+    };
+    let decision = judge(&errors(&seed), &evidence).unwrap_or(Decision::Named);
     Some(DragLaw {
         samples: idx.len(),
-        c2: th2[0],
-        offset: th2[1],
+        c2: seed.theta[0],
+        offset: seed.theta[1],
         exponent: p,
         exponent_stderr: stderr,
-        k: thp[0],
-        cv_gain_percent: gain * 100.0,
-        folds_better: wins,
-        rms_seed: (rss2 / n).sqrt(),
-        rms_extended: (rssp / n).sqrt(),
-        selected: gain >= MIN_GAIN && wins >= MIN_FOLDS_BETTER && (p - 2.0).abs() > 0.02,
+        k: free.theta[0],
+        cv_gain_percent: 100.0 * (1.0 - free.mse / seed.mse),
+        gain: Gain::of(&errors(&seed), &errors(&free)),
+        rms_seed: (seed.rss / seed.n).sqrt(),
+        rms_extended: (free.rss / free.n).sqrt(),
+        decision,
     })
+}
+
+/// The report of steady-state data: the drag law, J not identified.
+pub(crate) fn report(s: &Signals, law: DragLaw, why: InputError) -> Report {
+    let mut effects = Vec::new();
+    let kind = EffectKind::DragExponent;
+    if law.decision == Decision::Named {
+        let e = Effect::new(kind, law.exponent);
+        effects.push(NamedEffect {
+            effect: kind,
+            value: law.exponent,
+            unit: kind.unit(),
+            stderr: law.exponent_stderr,
+            gain_percent: 100.0 * (1.0 - law.rms_extended / law.rms_seed),
+            cv_gain_percent: law.cv_gain_percent,
+            gain: law.gain,
+            lag_form: None,
+            lag_delay_s: None,
+            explanation: kind.candidate().explanation(&e, law.exponent),
+        });
+    }
+    let n = s.len();
+    let base = BaseModel {
+        c1: 0.0,
+        c2: law.c2,
+        ..BaseModel::unknown()
+    };
+    let extended = BaseModel {
+        c1: 0.0,
+        ..BaseModel::unknown()
+    }
+    .power_law(law.k, f64::NAN, law.exponent, super::rms(&s.velocity));
+    let mut r = Report::cannot_judge(n, s.t[n - 1] - s.t[0], Vec::new());
+    r.rate_hz = s.rate;
+    r.unidentified = Unidentified::of(&base)
+        .into_iter()
+        .filter(|u| u.parameter == super::report::Parameter::Inertia)
+        .collect();
+    r.notes = vec![format!(
+        "steady-state data: the dynamics cannot be fitted ({}); the drag law is diagnosed from {} torque samples instead, \
+         and simulation_rms holds the torque residual [N·m] of the seed's law (F = c2·ω² + F₀) and of F = k·|ω|^p + F₀",
+        why, law.samples
+    )];
+    r.simulation_rms = SimulationRms {
+        base: law.rms_seed,
+        extended: law.rms_extended,
+        gain_percent: 100.0 * (1.0 - law.rms_extended / law.rms_seed),
+    };
+    r.residual_analysis = ResidualAnalysis {
+        correlations: Vec::new(),
+        dominant_frequency_hz: f64::NAN,
+        peak_to_median: f64::NAN,
+    };
+    r.base = base;
+    r.extended = extended;
+    r.effects = effects;
+    r.steady_state = Some(law);
+    r.steady_share = 1.0;
+    r.traces = Traces::default();
+    r.verdict = super::report::Verdict::NothingWrong;
+    r.conclude();
+    r
 }

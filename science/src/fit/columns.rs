@@ -61,7 +61,7 @@ pub fn fit_columns(
         ("acceleration", columns.acceleration.len()),
     ] {
         if len != n {
-            return Err(InputError(format!(
+            return Err(InputError::invalid(format!(
                 "{name}: column `{column}` has {len} values, `t` has {n}: every column needs one value per row"
             ))
             .into());

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use memmap2::Mmap;
 use propid_core::estimate::LoadEstimator;
-use propid_io::tsv::{Layout, RowError};
+use propid_io::tsv::{Layout, RowError, Values};
 
 /// Rows per block at first (small in tests, so that they merge blocks and cut inside them).
 pub(super) const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
@@ -19,7 +19,7 @@ pub(super) const BLOCK_ROWS: u64 = if cfg!(test) { 16 } else { 4096 };
 const MAX_BLOCKS: usize = if cfg!(test) { 8 } else { 1024 };
 /// The slots the fit converts: force, velocity, acceleration. The others (ts_local, t,
 /// position) are checked, and t's finiteness kept, without the cost of a float conversion.
-pub(super) const FIT_SLOTS: u8 = 0b1_1100;
+pub(super) const FIT_SLOTS: u16 = 0b1_1100;
 /// Pages behind the scan are dropped from the mapping every this many bytes (peak RSS).
 const RELEASE_BYTES: usize = 8 << 20;
 
@@ -135,6 +135,8 @@ pub(super) struct Chunk {
     pub run: Run,
     /// Rows in `run`.
     pub run_rows: u64,
+    /// Runs of complete rows begun in the chunk.
+    pub runs: u64,
     /// Local index of the run's first row.
     pub run_first_row: u64,
     /// The run starts at the chunk's first row.
@@ -145,21 +147,24 @@ pub(super) struct Chunk {
     pub breaker: Option<(u64, &'static str)>,
     /// The chunk's last incomplete row: (local line, column).
     pub last_incomplete: Option<(u64, &'static str)>,
+    /// Rows identical, byte for byte, to the row before them (a log written twice), and the
+    /// local line of the first.
+    pub copies: (u64, Option<u64>),
 }
 
 /// The first of t, force, velocity, acceleration that is not finite, if any.
-pub(super) fn incomplete(v: &[f64; 6]) -> Option<&'static str> {
+pub(super) fn incomplete(v: &Values) -> Option<&'static str> {
     const NAMES: [&str; 4] = ["t", "force", "velocity", "acceleration"];
     (1..5).find(|i| !v[*i].is_finite()).map(|i| NAMES[i - 1])
 }
 
 /// Calls `f(local line, line bytes, offset)` for each line of `data[start..end]` (without its
 /// `\n`), stopping early when `f` returns false.
-pub(super) fn lines(
-    data: &[u8],
+pub(super) fn lines<'a>(
+    data: &'a [u8],
     start: usize,
     end: usize,
-    mut f: impl FnMut(u64, &[u8], usize) -> bool,
+    mut f: impl FnMut(u64, &'a [u8], usize) -> bool,
 ) {
     let mut pos = start;
     let mut line = 0u64;
@@ -213,6 +218,7 @@ pub(super) fn scan(
     let mut in_run = false;
     let mut error = None;
     let mut released = start;
+    let mut previous: &[u8] = &[];
     lines(data, start, end, |line, bytes, offset| {
         c.lines = line;
         if offset - released >= RELEASE_BYTES {
@@ -231,6 +237,11 @@ pub(super) fn scan(
         };
         let row = c.rows;
         c.rows += 1;
+        if bytes == previous {
+            c.copies.0 += 1;
+            c.copies.1.get_or_insert(line);
+        }
+        previous = bytes;
         if let Some(column) = incomplete(&v) {
             in_run = false;
             c.last_incomplete = Some((line, column));
@@ -239,6 +250,7 @@ pub(super) fn scan(
         c.complete += 1;
         if !in_run {
             in_run = true;
+            c.runs += 1;
             c.run.clear();
             c.run_rows = 0;
             c.run_first_row = row;

@@ -1,0 +1,849 @@
+//! The search over models of several effects: stepwise, forward and backward, every nonlinear
+//! parameter re-tuned jointly after each addition, every decision taken by `select`.
+//!
+//! ```text
+//!  model M (the seed's, at first), its held-out errors
+//!    round: every effect not in M (nor tied with one in it, nor dropped) tuned on M,
+//!           scored on held-out data ─► Evidence ─► select::forward ─► a decision for each
+//!      named e:  M ← M + e; re-tune every nonlinear parameter of M given the others;
+//!                backward: drop the effect whose removal costs least while select::keep says
+//!                it may go; re-tune again
+//!      tied with e: recorded as ambiguous with it, not tried again: the rest of the model is
+//!                searched on top of the tied class
+//!  stop: no effect passes, or M holds max_effects effects
+//! ```
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde::Serialize;
+
+use super::candidate::{EffectKind, Estimate, Fitted, Inadmissible};
+use super::engine::{cross_validate, fit_on_all, Cv, Fit};
+use super::model::{Effect, Model};
+use super::select::{self, Decision, Evidence, FoldErrors, Gain, Rejection};
+use super::signals::Signals;
+use super::simulate::{fold_scores, FoldScores, SimPlan};
+use super::tune::Tuner;
+use super::{Observer, Stage};
+
+/// How one effect scored when it was tried.
+#[derive(Clone, Debug, Serialize)]
+pub struct CandidateScore {
+    /// Which effect.
+    #[serde(rename = "name")]
+    pub effect: EffectKind,
+    /// The round of the search it was tried in (from 1).
+    pub round: usize,
+    /// Its value, from the model with it fitted to all the data.
+    pub value: f64,
+    /// Its standard error.
+    pub stderr: f64,
+    /// Pooled held-out acceleration-equation gain over the model it was tried on [%].
+    pub cv_gain_percent: f64,
+    /// Pooled held-out simulated-velocity gain over that model [%].
+    pub simulation_gain_percent: f64,
+    /// The selection's criterion: the mean per-fold gain and its standard error.
+    pub gain: Gain,
+    /// What the selection decided.
+    pub decision: Decision,
+}
+
+/// A model and its held-out errors.
+#[derive(Clone)]
+pub(crate) struct Scored {
+    pub model: Model,
+    pub scores: FoldScores,
+    pub cv: Cv,
+}
+
+impl Scored {
+    pub fn of(model: Model, s: &Signals, plan: &SimPlan) -> Option<Scored> {
+        let scores = fold_scores(&model, s, plan)?;
+        let cv = Cv {
+            mse: scores.equation_pooled,
+            folds: scores.equation,
+        };
+        Some(Scored { model, scores, cv })
+    }
+
+    pub fn errors(&self) -> FoldErrors {
+        errors_of(&self.scores)
+    }
+}
+
+fn errors_of(s: &FoldScores) -> FoldErrors {
+    FoldErrors {
+        equation: s.equation,
+        simulation: Some(s.simulation),
+    }
+}
+
+/// An effect the data cannot tell from one in the model.
+#[derive(Clone, Debug)]
+pub(crate) struct Tie {
+    /// The effect in the model.
+    pub named: EffectKind,
+    /// The alternative, as tuned.
+    pub alternative: Effect,
+}
+
+/// What the search found.
+pub(crate) struct Found {
+    /// The final model and its errors.
+    pub model: Scored,
+    /// Every effect tried, every round.
+    pub candidates: Vec<CandidateScore>,
+    /// For each effect of the model, the held-out acceleration gain when it entered [%].
+    pub entered_with: Vec<(EffectKind, f64, Gain)>,
+    /// Effects tied with one in the model.
+    pub ties: Vec<Tie>,
+    /// Notes on the search.
+    pub notes: Vec<String>,
+}
+
+/// One effect tried on a model: its tuned form and its evidence.
+struct Trial {
+    effect: Effect,
+    scored: Scored,
+    evidence: Evidence,
+}
+
+/// The value of effect `index` of `model` from `fit`, and whether it can be the effect.
+pub(crate) fn judged(
+    model: &Model,
+    index: usize,
+    fit: &Fit,
+    s: &Signals,
+) -> (Estimate, Result<(), Inadmissible>) {
+    let e = model.effects[index];
+    let profile = || profiled(model, index, fit, s);
+    let fitted = Fitted {
+        theta: &fit.theta,
+        stderr: &fit.stderr,
+        column: model.column_of(index),
+        rms: (fit.rss / fit.n.max(1.0)).sqrt(),
+        profile: &profile,
+    };
+    let v = e.candidate().estimate(&e, &fitted);
+    (v, e.candidate().admissible(&e, v, &fitted))
+}
+
+/// The first effect of `model` other than `except` whose value in the joint fit `fit` is one its
+/// mechanism cannot have (a sign, a range, not finite), whether or not it is resolved: a model is
+/// physical only when every effect in it is. Cheap: no profiling (the sign does not need the
+/// nonlinear parameter's standard error).
+pub(crate) fn spoiled(model: &Model, except: usize, fit: &Fit) -> Option<EffectKind> {
+    let no_profile = || f64::NAN;
+    (0..model.effects.len())
+        .filter(|&i| i != except)
+        .find_map(|i| {
+            let e = model.effects[i];
+            let fitted = Fitted {
+                theta: &fit.theta,
+                stderr: &fit.stderr,
+                column: model.column_of(i),
+                rms: (fit.rss / fit.n.max(1.0)).sqrt(),
+                profile: &no_profile,
+            };
+            let v = e.candidate().estimate(&e, &fitted);
+            // Its sign and range alone: as if resolved.
+            let sure = Estimate { stderr: 0.0, ..v };
+            match e.candidate().admissible(&e, sure, &fitted) {
+                Err(
+                    Inadmissible::WrongSign
+                    | Inadmissible::NotFinite
+                    | Inadmissible::OutOfRange { .. },
+                ) => Some(e.kind),
+                _ => None,
+            }
+        })
+}
+
+/// The value of effect `index` of `model` from `fit`.
+pub(crate) fn estimate_of(model: &Model, index: usize, fit: &Fit, s: &Signals) -> Estimate {
+    judged(model, index, fit, s).0
+}
+
+/// A nonlinear parameter's standard error from the curvature of the residual sum of squares:
+/// var(q) ≈ 2σ² / RSS''(q).
+fn profiled(model: &Model, index: usize, fit: &Fit, s: &Signals) -> f64 {
+    let q = model.effects[index].param;
+    let h = (q.abs() * 0.02).max(1e-5);
+    let rss = |x: f64| {
+        let mut m = model.clone();
+        m.effects[index].param = x;
+        fit_on_all(&m, s).map_or(f64::NAN, |f| f.rss)
+    };
+    let (r0, rp, rm) = (fit.rss, rss(q + h), rss((q - h).max(1e-6)));
+    let curvature = (rp - 2.0 * r0 + rm) / (h * h);
+    let sigma2 = fit.rss / (fit.n - fit.theta.len() as f64 - 1.0).max(1.0);
+    if curvature > 0.0 {
+        (2.0 * sigma2 / curvature).sqrt()
+    } else {
+        f64::NAN
+    }
+}
+
+/// `kind` tuned on `parent`, scored, with its evidence; `Err` with the reason it could not be.
+fn try_effect(
+    kind: EffectKind,
+    parent: &Scored,
+    seed: Option<Effect>,
+    s: &Signals,
+    plan: &SimPlan,
+) -> Result<Trial, Rejection> {
+    COUNTS[0].fetch_add(1, Ordering::Relaxed);
+    let candidate = kind.candidate();
+    let tuner = Tuner {
+        model: &parent.model,
+        s,
+        kind,
+        parent: &parent.cv,
+        seed,
+    };
+    let (effect, _) = candidate.tune(&tuner).ok_or(Rejection::NotFitted)?;
+    let model = parent.model.with(effect).ok_or(Rejection::TooWide)?;
+    let last = model.effects.len() - 1;
+    let evaluate = |model: Model| -> Result<Trial, Rejection> {
+        let effect = model.effects[last];
+        let fit = fit_on_all(&model, s).ok_or(Rejection::NotFitted)?;
+        let (estimate, mut admissible) = judged(&model, last, &fit, s);
+        if let (Ok(()), Some(effect)) = (admissible, spoiled(&model, last, &fit)) {
+            admissible = Err(Inadmissible::Spoils { effect });
+        }
+        let scored = Scored::of(model, s, plan).ok_or(Rejection::NotFitted)?;
+        let evidence = Evidence {
+            effect: kind,
+            parameters: candidate.parameters(),
+            estimate,
+            admissible,
+            errors: scored.errors(),
+            simulation_sees: candidate.simulation_sees(),
+        };
+        Ok(Trial {
+            effect,
+            scored,
+            evidence,
+        })
+    };
+    let trial = evaluate(model.clone())?;
+    // Where the trial may be named (or come close), or its value can be the effect, the model's
+    // other nonlinear parameters are re-tuned with it: a lag tuned alone absorbs part of a
+    // constant torque, and keeps it unless re-tuned when the torque enters; an exponent tuned
+    // alone absorbs an offset, which then gains nothing until the exponent moves. (Only there:
+    // it is the costliest step of a trial.)
+    let contender = trial.evidence.admissible.is_ok()
+        || matches!(
+            select::judge(&parent.errors(), &trial.evidence),
+            None | Some(Decision::NearMiss)
+        );
+    if !contender || last == 0 {
+        return Ok(trial);
+    }
+    let joint = retune(model.clone(), s, Some(last));
+    if joint == model {
+        return Ok(trial);
+    }
+    let retuned = evaluate(joint)?;
+    let gain = |t: &Trial| Gain::of(&parent.errors(), &t.evidence.errors).mean;
+    Ok(if gain(&retuned) > gain(&trial) {
+        retuned
+    } else {
+        trial
+    })
+}
+
+/// Trials, pair trials and exchange trials run (profiling counts).
+pub static COUNTS: [AtomicUsize; 3] = [
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+    AtomicUsize::new(0),
+];
+
+/// The pooled gain of `after` over `before` [%].
+fn pooled_percent(before: &[f64], after: &[f64]) -> f64 {
+    100.0 * (1.0 - after.iter().sum::<f64>() / before.iter().sum::<f64>())
+}
+
+fn score_of(round: usize, parent: &Scored, t: &Trial, decision: Decision) -> CandidateScore {
+    CandidateScore {
+        effect: t.evidence.effect,
+        round,
+        value: t.evidence.estimate.value,
+        stderr: t.evidence.estimate.stderr,
+        cv_gain_percent: pooled_percent(&parent.scores.equation, &t.scored.scores.equation),
+        simulation_gain_percent: pooled_percent(
+            &parent.scores.simulation,
+            &t.scored.scores.simulation,
+        ),
+        gain: Gain::of(&parent.errors(), &t.evidence.errors),
+        decision,
+    }
+}
+
+/// Re-tunes the nonlinear parameters of `m`'s effects near their values, each given the others
+/// (one sweep, in order; `skip`: an effect just tuned on the others): the joint refit of every
+/// nonlinear parameter of a model. A re-tuned parameter is kept where it lowers the held-out
+/// error.
+fn retune(m: Model, s: &Signals, skip: Option<usize>) -> Model {
+    let mut model = m;
+    let Some(mut cv) = cross_validate(&model, s) else {
+        return model;
+    };
+    for i in 0..model.effects.len() {
+        if Some(i) == skip {
+            continue;
+        }
+        let e = model.effects[i];
+        let rest = model.without(i);
+        let tuner = Tuner {
+            model: &rest,
+            s,
+            kind: e.kind,
+            parent: &cv,
+            seed: None,
+        };
+        let Some((next, Some(next_cv))) = e.candidate().retune(&e, &tuner) else {
+            continue;
+        };
+        if next_cv.mse < cv.mse {
+            let mut m = rest;
+            m.effects.insert(i, next);
+            model = m;
+            cv = next_cv;
+        }
+    }
+    model
+}
+
+/// The candidates a pair look-ahead combines: the best this many of a round that named nothing,
+/// by held-out acceleration gain (a bound on its cost, not a rule of the decision).
+const PAIR_CANDIDATES: usize = 3;
+
+/// Pairs are tried only after a round whose best candidate lowered the held-out acceleration
+/// error by at least this share: an effect that masks another still moves the fit (a cost
+/// bound: data with nothing left to explain try no pairs).
+const PAIR_WORTH: f64 = 0.01;
+
+/// Rivals of a named effect tried in its place (rule 8): those that passed rules 1–4 in the
+/// round it was named with at least this share of its gain (a bound on the cost).
+const RIVAL_SHARE: f64 = 0.5;
+
+/// The search's state.
+struct Search<'a> {
+    s: &'a Signals,
+    plan: &'a SimPlan,
+    progress: Observer<'a>,
+    current: Scored,
+    found: Found,
+    /// Effects not to try again: tied with one in the model, or dropped.
+    excluded: Vec<EffectKind>,
+    /// For each effect in the model, the rivals it passed in the round it was named.
+    rivals: Vec<(EffectKind, Vec<EffectKind>)>,
+    round: usize,
+    max_effects: usize,
+}
+
+impl Search<'_> {
+    /// The effects that may be tried on `model`.
+    fn open(&self, model: &Model) -> Vec<EffectKind> {
+        EffectKind::searched()
+            .filter(|&k| {
+                !self.excluded.contains(&k)
+                    && !model.has(k)
+                    && (k.candidate().slot() != super::candidate::Slot::Lag || !model.has_lag())
+            })
+            .collect()
+    }
+
+    /// `kinds` tried on `parent`, in parallel; those that could not be tried recorded in the
+    /// first round. An effect that refines another is tried after it, and only where it passes
+    /// rules 1–4.
+    fn trials(&mut self, kinds: &[EffectKind], parent: &Scored) -> Vec<Trial> {
+        let (s, plan, progress, round) = (self.s, self.plan, self.progress, self.round);
+        let done = AtomicUsize::new(0);
+        let of = kinds.len();
+        progress(Stage::Candidates { round, done: 0, of });
+        let (first, refining): (Vec<EffectKind>, Vec<EffectKind>) =
+            kinds.iter().partition(|k| k.refines().is_none());
+        let run = |jobs: &[(EffectKind, Option<Effect>)]| {
+            in_parallel(jobs, |&(k, seed)| {
+                let r = try_effect(k, parent, seed, s, plan);
+                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress(Stage::Candidates { round, done: d, of });
+                (k, r)
+            })
+        };
+        let jobs: Vec<(EffectKind, Option<Effect>)> = first.iter().map(|&k| (k, None)).collect();
+        let mut outcomes = run(&jobs);
+        let passed = |k: EffectKind, outcomes: &[(EffectKind, Result<Trial, Rejection>)]| {
+            outcomes.iter().find_map(|(kind, r)| match r {
+                Ok(t)
+                    if *kind == k
+                        && matches!(
+                            select::judge(&parent.errors(), &t.evidence),
+                            None | Some(Decision::NearMiss)
+                        ) =>
+                {
+                    Some(t.effect)
+                }
+                _ => None,
+            })
+        };
+        let jobs: Vec<(EffectKind, Option<Effect>)> = refining
+            .iter()
+            .filter_map(|&k| {
+                k.refines()
+                    .and_then(|r| passed(r, &outcomes))
+                    .map(|e| (k, Some(e)))
+            })
+            .collect();
+        outcomes.extend(run(&jobs));
+        // Refiners not tried count as done.
+        for _ in jobs.len()..refining.len() {
+            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress(Stage::Candidates { round, done: d, of });
+        }
+        let mut trials = Vec::new();
+        for (k, outcome) in outcomes {
+            match outcome {
+                Ok(t) => trials.push(t),
+                // Tried and could not be: said once, in the first round.
+                Err(reason) if round == 1 => self.found.candidates.push(CandidateScore {
+                    effect: k,
+                    round,
+                    value: f64::NAN,
+                    stderr: f64::NAN,
+                    cv_gain_percent: f64::NAN,
+                    simulation_gain_percent: f64::NAN,
+                    gain: Gain {
+                        mean: f64::NAN,
+                        stderr: f64::NAN,
+                        folds_better: 0,
+                    },
+                    decision: Decision::Rejected { reason },
+                }),
+                Err(_) => {}
+            }
+        }
+        // In the order of the kinds asked for (the same report whatever the order of work).
+        trials.sort_by_key(|t| kinds.iter().position(|k| *k == t.effect.kind));
+        trials
+    }
+
+    /// Makes `next` (a model derived from the current one) current, re-tuned jointly.
+    fn adopt(&mut self, next: Scored) {
+        let joint = retune(next.model.clone(), self.s, None);
+        self.current = if joint == next.model {
+            next
+        } else {
+            Scored::of(joint, self.s, self.plan).unwrap_or(next)
+        };
+    }
+
+    /// Records that `t` entered the model, with what it gained over `parent`.
+    fn entered(&mut self, parent: &Scored, t: &Trial, rivals: Vec<EffectKind>) {
+        self.found.entered_with.push((
+            t.effect.kind,
+            pooled_percent(&parent.scores.equation, &t.scored.scores.equation),
+            Gain::of(&parent.errors(), &t.evidence.errors),
+        ));
+        self.rivals.push((t.effect.kind, rivals));
+    }
+
+    /// A forward round (rules 1–6); whether it named an effect.
+    fn forward(&mut self) -> Option<Vec<Trial>> {
+        let parent = self.current.clone();
+        let kinds = self.open(&parent.model);
+        let trials = self.trials(&kinds, &parent);
+        let evidence: Vec<Evidence> = trials.iter().map(|t| t.evidence.clone()).collect();
+        let step = select::forward(&parent.errors(), &evidence);
+        for (t, d) in trials.iter().zip(&step.decisions) {
+            self.found
+                .candidates
+                .push(score_of(self.round, &parent, t, *d));
+        }
+        let Some(named) = step.named else {
+            return Some(trials);
+        };
+        for (t, d) in trials.iter().zip(&step.decisions) {
+            if let Decision::Ambiguous { with } = d {
+                self.found.ties.push(Tie {
+                    named: *with,
+                    alternative: t.effect,
+                });
+                self.excluded.push(t.effect.kind);
+            }
+        }
+        let winner = Gain::of(&parent.errors(), &trials[named].evidence.errors).mean;
+        let rivals = trials
+            .iter()
+            .zip(&step.decisions)
+            .filter(|(t, d)| {
+                matches!(
+                    d,
+                    Decision::Rejected {
+                        reason: Rejection::Outdone { .. }
+                    }
+                ) && Gain::of(&parent.errors(), &t.evidence.errors).mean >= RIVAL_SHARE * winner
+            })
+            .map(|(t, _)| t.effect.kind)
+            .collect();
+        let chosen = trials.into_iter().nth(named)?;
+        self.entered(&parent, &chosen, rivals);
+        self.adopt(chosen.scored);
+        None
+    }
+
+    /// Rule 9 after a round that named nothing (`trials`): the best pairs of its candidates;
+    /// whether a pair was named.
+    fn pairs(&mut self, trials: &[Trial]) -> bool {
+        if self.current.model.effects.len() + 2 > self.max_effects {
+            return false;
+        }
+        let parent = self.current.clone();
+        let worth = trials.iter().any(|t| {
+            t.scored.scores.equation_pooled < (1.0 - PAIR_WORTH) * parent.scores.equation_pooled
+        });
+        if !worth {
+            return false;
+        }
+        let mut best: Vec<&Trial> = Vec::new();
+        let mut ranked: Vec<&Trial> = trials.iter().collect();
+        ranked.sort_by(|a, b| {
+            a.scored
+                .scores
+                .equation_pooled
+                .total_cmp(&b.scored.scores.equation_pooled)
+        });
+        for t in ranked {
+            // A twin (the same column under another name) adds no other pair.
+            if best.len() < PAIR_CANDIDATES
+                && !best
+                    .iter()
+                    .any(|b| b.scored.scores.equation == t.scored.scores.equation)
+            {
+                best.push(t);
+            }
+        }
+        let mut pairs = Vec::new();
+        for i in 0..best.len() {
+            for j in i + 1..best.len() {
+                pairs.push((best[i].effect, best[j].effect.kind));
+            }
+        }
+        let (s, plan) = (self.s, self.plan);
+        let outcomes = in_parallel(&pairs, |&(a, b)| try_pair(a, b, &parent, s, plan));
+        let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
+            Gain::of(&parent.errors(), &x.errors())
+                .mean
+                .total_cmp(&Gain::of(&parent.errors(), &y.errors()).mean)
+        }) else {
+            return false;
+        };
+        let n = pair.model.effects.len();
+        for k in [n - 2, n - 1] {
+            let e = pair.model.effects[k];
+            let fit = fit_on_all(&pair.model, s);
+            let (estimate, _) = fit
+                .as_ref()
+                .map(|f| judged(&pair.model, k, f, s))
+                .unwrap_or((Estimate::new(f64::NAN, f64::NAN), Ok(())));
+            self.found.candidates.push(CandidateScore {
+                effect: e.kind,
+                round: self.round,
+                value: estimate.value,
+                stderr: estimate.stderr,
+                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
+                simulation_gain_percent: pooled_percent(
+                    &parent.scores.simulation,
+                    &pair.scores.simulation,
+                ),
+                gain: Gain::of(&parent.errors(), &pair.errors()),
+                decision: Decision::Named,
+            });
+            self.found.entered_with.push((
+                e.kind,
+                pooled_percent(&parent.scores.equation, &pair.scores.equation),
+                Gain::of(&parent.errors(), &pair.errors()),
+            ));
+            self.rivals.push((e.kind, Vec::new()));
+        }
+        // A member's twins (the same column under another name) are ambiguous with it.
+        for k in [n - 2, n - 1] {
+            let member = pair.model.effects[k].kind;
+            let Some(single) = trials.iter().find(|t| t.effect.kind == member) else {
+                continue;
+            };
+            for t in trials {
+                if t.effect.kind != member
+                    && t.scored.scores.equation == single.scored.scores.equation
+                {
+                    self.found.ties.push(Tie {
+                        named: member,
+                        alternative: t.effect,
+                    });
+                    self.excluded.push(t.effect.kind);
+                }
+            }
+        }
+        self.found.notes.push(format!(
+            "{} and {} were named together: neither gains alone, each masks the other",
+            pair.model.effects[n - 2].kind,
+            pair.model.effects[n - 1].kind
+        ));
+        self.adopt(pair);
+        true
+    }
+
+    /// Rule 8 for every effect but the newest: its rivals in its place.
+    fn exchange(&mut self) {
+        let newest = self.current.model.effects.len().saturating_sub(1);
+        for i in 0..newest {
+            let parent = self.current.clone();
+            let old = parent.model.effects[i];
+            let rest = Scored::of(parent.model.without(i), self.s, self.plan);
+            let Some(rest) = rest else { continue };
+            let rivals: Vec<EffectKind> = self
+                .rivals
+                .iter()
+                .find(|(k, _)| *k == old.kind)
+                .map(|(_, r)| r.clone())
+                .unwrap_or_default()
+                .into_iter()
+                // Any rival not in the model, tied with another effect or not: an exchange is
+                // where a tie of the rounds before is settled.
+                .filter(|k| {
+                    !rest.model.has(*k)
+                        && (k.candidate().slot() != super::candidate::Slot::Lag
+                            || !rest.model.has_lag())
+                })
+                .collect();
+            if rivals.is_empty() {
+                continue;
+            }
+            COUNTS[2].fetch_add(rivals.len(), Ordering::Relaxed);
+            let trials = self.trials(&rivals, &rest);
+            let parameters = old.candidate().parameters();
+            let mut replace: Option<Trial> = None;
+            for t in trials {
+                match select::exchange(&parent.errors(), parameters, &t.evidence) {
+                    select::Exchange::Replace => {
+                        let better = replace.as_ref().is_none_or(|r| {
+                            Gain::of(&parent.errors(), &t.evidence.errors).mean
+                                > Gain::of(&parent.errors(), &r.evidence.errors).mean
+                        });
+                        if better {
+                            replace = Some(t);
+                        }
+                    }
+                    select::Exchange::Tie => {
+                        self.found.candidates.push(score_of(
+                            self.round,
+                            &parent,
+                            &t,
+                            Decision::Ambiguous { with: old.kind },
+                        ));
+                        if !self
+                            .found
+                            .ties
+                            .iter()
+                            .any(|x| x.named == old.kind && x.alternative.kind == t.effect.kind)
+                        {
+                            self.found.ties.push(Tie {
+                                named: old.kind,
+                                alternative: t.effect,
+                            });
+                        }
+                        self.excluded.push(t.effect.kind);
+                    }
+                    select::Exchange::Keep => {}
+                }
+            }
+            if let Some(t) = replace {
+                self.found.notes.push(format!(
+                    "{} replaced {} after round {}: with the effects named since, the model with it instead is better on held-out data",
+                    t.effect.kind, old.kind, self.round
+                ));
+                self.found
+                    .candidates
+                    .push(score_of(self.round, &parent, &t, Decision::Named));
+                self.drop_record(old.kind, &parent, &rest);
+                self.entered(&rest, &t, Vec::new());
+                self.adopt(t.scored);
+            }
+        }
+    }
+
+    /// Records that `gone` left the model `with` (leaving `without`).
+    fn drop_record(&mut self, gone: EffectKind, with: &Scored, without: &Scored) {
+        self.found.candidates.push(CandidateScore {
+            effect: gone,
+            round: self.round,
+            value: f64::NAN,
+            stderr: f64::NAN,
+            cv_gain_percent: pooled_percent(&without.scores.equation, &with.scores.equation),
+            simulation_gain_percent: pooled_percent(
+                &without.scores.simulation,
+                &with.scores.simulation,
+            ),
+            gain: Gain::of(&without.errors(), &with.errors()),
+            decision: Decision::Dropped,
+        });
+        self.found.entered_with.retain(|(k, _, _)| *k != gone);
+        self.found.ties.retain(|t| t.named != gone);
+        self.rivals.retain(|(k, _)| *k != gone);
+        self.excluded.push(gone);
+    }
+
+    /// Rule 7: drops what the model no longer needs, the cheapest loss first.
+    fn backward(&mut self) {
+        while self.current.model.effects.len() > 1 {
+            let current = self.current.clone();
+            let removal: Vec<(usize, Scored)> = (0..current.model.effects.len())
+                .filter_map(|i| {
+                    Scored::of(current.model.without(i), self.s, self.plan).map(|w| (i, w))
+                })
+                .filter(|(_, w)| !select::keep(&w.errors(), &current.errors()))
+                .collect();
+            let Some((i, without)) = removal.into_iter().min_by(|a, b| {
+                let ga = Gain::of(&a.1.errors(), &current.errors()).mean;
+                let gb = Gain::of(&b.1.errors(), &current.errors()).mean;
+                ga.total_cmp(&gb)
+            }) else {
+                break;
+            };
+            let gone = current.model.effects[i].kind;
+            self.found.notes.push(format!(
+                "{gone} was dropped after round {}: with the effects named since, the model without it is not significantly worse",
+                self.round
+            ));
+            self.drop_record(gone, &current, &without);
+            self.adopt(without);
+        }
+    }
+}
+
+/// `a` (tuned on `parent`) and `kind` tuned on the model with it, re-tuned jointly: the pair's
+/// model, when rule 9 names it.
+fn try_pair(
+    a: Effect,
+    kind: EffectKind,
+    parent: &Scored,
+    s: &Signals,
+    plan: &SimPlan,
+) -> Option<Scored> {
+    COUNTS[1].fetch_add(1, Ordering::Relaxed);
+    let with_a = parent.model.with(a)?;
+    let cv = cross_validate(&with_a, s)?;
+    let tuner = Tuner {
+        model: &with_a,
+        s,
+        kind,
+        parent: &cv,
+        seed: None,
+    };
+    let (b, _) = kind.candidate().tune(&tuner)?;
+    let both = retune(with_a.with(b)?, s, None);
+    let n = both.effects.len();
+    let fit = fit_on_all(&both, s)?;
+    let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())
+        && spoiled(&both, n - 1, &fit).is_none();
+    let scored = Scored::of(both, s, plan)?;
+    let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
+    let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;
+    select::pair(
+        &parent.errors(),
+        &scored.errors(),
+        &without_first.errors(),
+        &without_second.errors(),
+        admissible,
+    )
+    .then_some(scored)
+}
+
+/// The stepwise search (see the module documentation).
+pub(crate) fn search(
+    s: &Signals,
+    plan: &SimPlan,
+    max_effects: usize,
+    progress: Observer<'_>,
+) -> Option<Found> {
+    let current = Scored::of(Model::default(), s, plan)?;
+    let mut search = Search {
+        s,
+        plan,
+        progress,
+        found: Found {
+            model: current.clone(),
+            candidates: Vec::new(),
+            entered_with: Vec::new(),
+            ties: Vec::new(),
+            notes: Vec::new(),
+        },
+        current,
+        excluded: Vec::new(),
+        rivals: Vec::new(),
+        round: 0,
+        max_effects,
+    };
+    let signal_power = s.acceleration[s.first..].iter().map(|a| a * a).sum::<f64>()
+        / (s.len() - s.first).max(1) as f64;
+    // Each round names an effect (or a pair) or ends the search; an effect dropped or tied is
+    // not tried again, so rounds are bounded by twice the effects there are.
+    for round in 1..=2 * EffectKind::ALL.len() {
+        search.round = round;
+        if search.current.model.effects.len() >= max_effects {
+            break;
+        }
+        // A model that already fits to rounding error leaves nothing to explain.
+        if search.current.cv.mse < 1e-18 * signal_power {
+            break;
+        }
+        if let Some(trials) = search.forward() {
+            if !search.pairs(&trials) {
+                break;
+            }
+        }
+        search.exchange();
+        search.backward();
+    }
+    search.found.model = search.current;
+    Some(search.found)
+}
+
+/// `f` over `items` on up to as many threads as the machine has cores, results in item order.
+pub(crate) fn in_parallel<T: Sync, R: Send>(items: &[T], f: impl Fn(&T) -> R + Sync) -> Vec<R> {
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(items.len())
+        .max(1);
+    if threads == 1 {
+        return items.iter().map(f).collect();
+    }
+    let next = AtomicUsize::new(0);
+    let mut done: Vec<(usize, R)> = std::thread::scope(|scope| {
+        let workers: Vec<_> = (0..threads)
+            .map(|_| {
+                scope.spawn(|| {
+                    let mut mine = Vec::new();
+                    loop {
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        let Some(item) = items.get(i) else { break };
+                        mine.push((i, f(item)));
+                    }
+                    mine
+                })
+            })
+            .collect();
+        workers
+            .into_iter()
+            .flat_map(|w| match w.join() {
+                Ok(v) => v,
+                Err(panic) => std::panic::resume_unwind(panic),
+            })
+            .collect()
+    });
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, r)| r).collect()
+}

@@ -1,0 +1,287 @@
+//! `propid diagnose` against the independent reference stand (tests/independent_stand: Python,
+//! written from first principles without reading propid's simulators or its diagnosis). Every
+//! diagnosis case of the stand, one effect or two at once, is generated with two noise seeds and
+//! judged against the truth the stand's JSON states: the effects an ideal report names (or an
+//! ambiguity the stand itself lists as equivalent), each value within 10 %, the extended model's J
+//! and drag within 2 %, a load transient localised in time, and nothing named on clean data.
+//!
+//! The table it prints is docs/SCIENCE.md's "The independent stand". Cases the diagnosis does not
+//! get right are listed in [`KNOWN_LIMITS`] with the reason, and asserted to stay honest (never a
+//! verdict that the model explains the data while J or the drag is off): a case leaves that list when it is fixed, and the
+//! test fails if a listed case starts passing, so the list and the docs cannot drift.
+//!
+//! `#[ignore]`d: it needs python3 with numpy and scipy (ci/setup.sh installs them);
+//! ci/steps/38-diagnose-independent.sh runs it with `-- --ignored`.
+
+mod expect;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use expect::{describe, judge, judge_fit, say, Expected, Ties, Truth};
+use propid_science::diagnose::{diagnose, read_samples, EffectKind, Options, Report, Verdict};
+use serde_json::Value;
+
+/// The stand's diagnosis cases (its thrust cases are propulsion's: propulsion_independent.rs).
+const CASES: &[&str] = &[
+    "clean",
+    "clean_chirp",
+    "torque_lag_8ms",
+    "torque_lag_15ms",
+    "force_offset",
+    "viscous",
+    "coulomb_reversing",
+    "drag_exponent_1p8",
+    "drag_exponent_2p2",
+    "force_sensor_lag",
+    "force_sensor_2nd_order",
+    "acceleration_lag",
+    "braking",
+    "lag_offset",
+    "lag_viscous",
+    "lag_coulomb_reversing",
+    "drag_exponent_offset",
+    "braking_lag",
+    "sensor_filter_drag_exponent",
+    "large_clean",
+    "large_torque_lag_25ms",
+    "transient_late",
+    "transient_early",
+];
+
+/// The noise seeds every case is drawn with.
+const SEEDS: [u64; 2] = [1, 2];
+
+/// Cases (case, seed) the diagnosis does not get right today, and why. Each must still end
+/// honestly: no verdict that the model explains the data while its J or drag is more than 2 %
+/// off.
+const KNOWN_LIMITS: &[(&str, u64, &str)] = &[
+    ("torque_lag_8ms", 1, LAG_SHORT),
+    ("torque_lag_8ms", 2, LAG_SHORT),
+    ("torque_lag_15ms", 1, LAG_UNDER_A_TERM),
+    ("torque_lag_15ms", 2, LAG_UNDER_A_TERM),
+    ("lag_offset", 1, LAG_UNDER_A_TERM),
+    ("lag_offset", 2, LAG_UNDER_A_TERM),
+    ("lag_viscous", 1, LAG_UNDER_A_TERM),
+    ("lag_viscous", 2, LAG_UNDER_A_TERM),
+    ("lag_coulomb_reversing", 1, LAG_UNDER_A_TERM),
+    ("lag_coulomb_reversing", 2, LAG_UNDER_A_TERM),
+    ("braking_lag", 1, LAG_UNDER_A_TERM),
+    ("braking_lag", 2, LAG_UNDER_A_TERM),
+    ("viscous", 1, SPEED_SHAPES),
+    ("drag_exponent_offset", 1, SPEED_SHAPES),
+    ("drag_exponent_offset", 2, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 1, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 2, SPEED_SHAPES),
+    ("force_sensor_lag", 1, SENSOR_LAG),
+    ("force_sensor_lag", 2, SENSOR_LAG),
+    ("acceleration_lag", 1, SENSOR_LAG),
+    ("acceleration_lag", 2, SENSOR_LAG),
+    ("transient_late", 1, TRANSIENT_BIAS),
+    ("transient_late", 2, TRANSIENT_BIAS),
+    ("transient_early", 1, TRANSIENT_BIAS),
+    ("transient_early", 2, TRANSIENT_BIAS),
+];
+
+/// Known limits where the verdict is worse than a miss: it says the model explains the data
+/// while J or the drag is more than 2 % off (docs/SCIENCE.md says so). A 10 ms torque lag on a
+/// reversing sine beside a 5 mN·m Coulomb friction: the friction is named within 8 %, the lag is
+/// not found (see [`LAG_UNDER_A_TERM`]), and c2 reads 12 % low, with the verdict "explained".
+const SILENTLY_WRONG: &[(&str, u64)] =
+    &[("lag_coulomb_reversing", 1), ("lag_coulomb_reversing", 2)];
+
+/// A lag's nonlinear parameter is tuned by the held-out acceleration-equation error, which this
+/// stand's acceleration noise dominates: on top of a constant torque a 15 ms lag gains 0.02 % in
+/// the equation and 16 % in the simulated velocity, so the lag is tuned to 0.4 ms and the
+/// constant torque (Coulomb or offset, 14 % too large) absorbs it; J reads 4–5 % high. The cure
+/// is output-error (simulated-velocity) tuning and a criterion that does not require the
+/// equation to see a lag (select.rs, rule 4): not done.
+const LAG_UNDER_A_TERM: &str =
+    "a lag beside or mimicked by a torque term: tuned by the noise-dominated equation error";
+
+/// An 8 ms lag alone is named, but at 6.3–6.6 ms (17–22 % short) and tied with constant torques.
+const LAG_SHORT: &str = "an 8 ms lag named 17–22 % short, tied with constant torques";
+
+/// ω, |ω|^p and a constant over the sine's 816–2449 rad/s: the diagnosis reports viscous and
+/// exponent as tied (the stand's ideal report does not), or names an offset for a sensor filter
+/// plus an exponent.
+const SPEED_SHAPES: &str =
+    "torque shapes of speed the sine's band does not separate for the selection";
+
+/// A 10 ms first-order force-sensor lag is tied with an offset or lost to one; the acceleration
+/// lag is not found.
+const SENSOR_LAG: &str = "sensor-side lags on this stand's noise";
+
+/// The 3 s load transient is found and localised (the window reported overlaps it), but the fit
+/// keeps its samples, so J reads 3.7–16 % high.
+const TRANSIENT_BIAS: &str = "a load transient localised, but its samples bias J";
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .unwrap()
+        .to_path_buf()
+}
+
+fn kind(name: &str) -> EffectKind {
+    *EffectKind::ALL
+        .iter()
+        .find(|k| k.name() == name)
+        .unwrap_or_else(|| panic!("the stand names an effect propid does not know: {name}"))
+}
+
+/// The stand's J and drag law, compared at the steady speed at half of full scale (the middle
+/// of the seed's 0.1..0.9).
+fn truth_of(truth: &Value) -> Truth {
+    let ideal = &truth["ideal_report"];
+    let p = ideal["effects"]["drag_exponent"]["value"]
+        .as_f64()
+        .unwrap_or(2.0);
+    let k = ideal["c2"].as_f64().unwrap();
+    let full_scale = truth["rotor"]["full_scale_torque_Nm"].as_f64().unwrap();
+    Truth {
+        inertia: ideal["J"].as_f64().unwrap(),
+        k,
+        p,
+        speed: (0.5 * full_scale / k).powf(1.0 / p),
+    }
+}
+
+/// What is wrong with `r` against the stand's truth (empty: right).
+fn problems(r: &Report, truth: &Value) -> Vec<String> {
+    let ideal = &truth["ideal_report"];
+    let expected: Vec<Expected> = ideal["effects"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .map(|(name, e)| Expected {
+            kind: kind(name),
+            value: e["value"].as_f64().unwrap(),
+            tolerance: 0.10,
+        })
+        .collect();
+    let pairs: Vec<(EffectKind, EffectKind)> = ideal["equivalent_alternatives"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|a| {
+            (
+                kind(a["instead_of"].as_str().unwrap()),
+                kind(a["name"].as_str().unwrap()),
+            )
+        })
+        .collect();
+    let mut bad = judge(r, &expected, Ties::Only(&pairs), Some(truth_of(truth)));
+    for window in ideal["unexplained"].as_array().unwrap() {
+        let (from, to) = (
+            window["t_start_s"].as_f64().unwrap(),
+            window["t_end_s"].as_f64().unwrap(),
+        );
+        let found = r.concentration.as_ref().is_some_and(|c| {
+            c.from_s < to && c.to_s > from && c.to_s - c.from_s < 4.0 * (to - from)
+        });
+        if !found || r.verdict != Verdict::Unexplained {
+            bad.push(format!(
+                "the load transient at {from}–{to} s not reported as unexplained and localised"
+            ));
+        }
+    }
+    bad
+}
+
+/// A verdict that says the model (the seed's, or with the effects named) explains the data.
+fn says_explained(r: &Report) -> bool {
+    matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
+}
+
+#[test]
+#[ignore = "needs python3 with numpy and scipy (ci/steps/38-diagnose-independent.sh)"]
+fn the_independent_stand_is_diagnosed_right() {
+    let out = std::env::temp_dir().join(format!("propid-independent-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let mut wrong = Vec::new();
+    let mut right = 0;
+    say(format!(
+        "{:<30} {:>4}  {:<7} report",
+        "case", "seed", "outcome"
+    ));
+    let seeds: Vec<u64> = match std::env::var("PROPID_SEED") {
+        Ok(s) => vec![s.parse().expect("PROPID_SEED is a number")],
+        Err(_) => SEEDS.to_vec(),
+    };
+    for &seed in &seeds {
+        let status = Command::new("python3")
+            .arg(repo().join("tests/independent_stand/stand.py"))
+            .args(["--all", "--seed", &seed.to_string(), "--out"])
+            .arg(&out)
+            .stdout(std::process::Stdio::null())
+            .status()
+            .expect("python3 runs");
+        assert!(
+            status.success(),
+            "stand.py --all failed (python3 with numpy and scipy?)"
+        );
+        let only = std::env::var("PROPID_CASE").ok();
+        for &case in CASES
+            .iter()
+            .filter(|c| only.as_deref().is_none_or(|o| o == **c))
+        {
+            let tsv = out.join(format!("{case}-seed{seed}.tsv"));
+            let json =
+                std::fs::read_to_string(out.join(format!("{case}-seed{seed}.json"))).unwrap();
+            let truth: Value = serde_json::from_str(&json).unwrap();
+            let (samples, _) = read_samples(&tsv).expect("the stand's TSV reads");
+            let r = diagnose(&samples, Options::default()).expect("diagnosis runs");
+            expect::verbose(&r);
+            let bad = problems(&r, &truth);
+            let limit = KNOWN_LIMITS
+                .iter()
+                .find(|&&(c, s, _)| c == case && s == seed);
+            let outcome = match (bad.is_empty(), limit) {
+                (true, None) => "right",
+                (true, Some(_)) => "FIXED",
+                (false, Some(_)) => "limit",
+                (false, None) => "WRONG",
+            };
+            say(format!(
+                "{case:<30} {seed:>4}  {outcome:<7} {}{}",
+                describe(&r),
+                if bad.is_empty() {
+                    String::new()
+                } else {
+                    format!("\n{:>44}{}", "", bad.join("; "))
+                }
+            ));
+            match (bad.is_empty(), limit) {
+                (true, None) => right += 1,
+                (true, Some(_)) => wrong.push(format!(
+                    "{case} seed {seed}: right now; take it off KNOWN_LIMITS and the docs"
+                )),
+                (false, Some(_)) => {
+                    // Honest: a verdict that the model explains the data only where its J and
+                    // drag are right anyway (the effect missed does not matter at 2 %).
+                    let silent = SILENTLY_WRONG.iter().any(|&(c, s)| c == case && s == seed);
+                    let off = says_explained(&r) && !judge_fit(&r, truth_of(&truth)).is_empty();
+                    if off != silent {
+                        wrong.push(format!(
+                            "{case} seed {seed}: {}",
+                            if off {
+                                "a known limit, but the verdict says the model explains the data while J or the drag is off"
+                            } else {
+                                "no longer silently wrong: take it off SILENTLY_WRONG and the docs"
+                            }
+                        ));
+                    }
+                }
+                (false, None) => wrong.push(format!("{case} seed {seed}: {}", bad.join("; "))),
+            }
+        }
+    }
+    let total = CASES.len() * seeds.len();
+    say(format!(
+        "right {right} of {total}; known limits {}",
+        KNOWN_LIMITS.len()
+    ));
+    let _ = std::fs::remove_dir_all(&out);
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
