@@ -33,3 +33,19 @@ run_ignored() {
   [ "$want" -gt 0 ] || { echo "$file has no #[ignore]d test" >&2; return 1; }
   expect_tests "$want" cargo test -q -p "$package" --test "$(basename "$file" .rs)" -- --ignored "$@"
 }
+
+# A script's background processes: append their PIDs here; `clean_at_exit` stops them.
+pids=()
+
+# clean_at_exit DIR: when the script exits, however it exits, stop the processes in `pids` and
+# remove DIR (a scratch folder).
+clean_at_exit() {
+  _scratch=$1
+  trap _clean_up EXIT
+}
+
+_clean_up() {
+  for p in "${pids[@]}"; do kill "$p" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$_scratch"
+}

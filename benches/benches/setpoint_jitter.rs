@@ -86,7 +86,11 @@ fn run_loop(seconds: f64, live: bool) -> Vec<f64> {
         pattern: Pattern::Sine,
     };
     let played = Played::try_from(excitation).unwrap();
-    let cfg = DriveConfig::example(played);
+    // No drive answers: no soft start (it would stop for want of feedback), the loop alone.
+    let cfg = DriveConfig {
+        limits: propid_drive_proto::limits::Limits::OFF,
+        ..DriveConfig::example(played)
+    };
     let stop = Arc::new(AtomicBool::new(false));
     let mut page = live.then(|| {
         let state = Arc::new(LiveState::default());

@@ -78,6 +78,8 @@ pub fn run_drive_machine(
         StopReport {
             reason: StopReason::Transport("the drive loop ended before the drive stopped".into()),
             rows: now.rows,
+            feedback_lost: now.feedback_lost,
+            damaged_frames: 0,
             standby_sent: 0,
             zero_setpoints_sent: 0,
             tx: now.tx,

@@ -235,7 +235,7 @@ impl DriveView {
         let mut feed = LiveFeed::new(state);
         feed.readiness("ENGAGED");
         feed.status(
-            "init phase: at the high setpoint, feedback not recorded",
+            "soft start and init phase: feedback checked, not recorded",
             false,
         );
         DriveView {
@@ -250,6 +250,13 @@ impl DriveView {
     pub fn on_event(&mut self, event: &DriveEvent) {
         let excitation = self.played.excitation();
         match event {
+            DriveEvent::SoftStartPassed(p) => self.feed.status(
+                format!(
+                    "soft start passed ({:.0} → {:.0} rad/s); init phase at the high setpoint",
+                    p.from, p.to
+                ),
+                false,
+            ),
             DriveEvent::PatternStarted => self.feed.status(
                 format!(
                     "running: {} pattern, {} s",

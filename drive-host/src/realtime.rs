@@ -12,12 +12,15 @@
 //!    transport.receive(until poll_timeout) ─► machine.handle_frame
 //! ```
 //! The loop never waits on a write: a congested link is the machine's business (it keeps the
-//! frame and offers it again until its deadline).
+//! frame and offers it again until its deadline). For the run's length its thread runs at a
+//! real-time priority where the OS permits it ([`propid_transport::priority`]): on a busy machine a
+//! normal thread waited in the run queue for over a second and the run stopped.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use propid_core::time::Instant;
+use propid_transport::priority::{raise_thread_priority, ThreadPriority};
 use propid_transport::{BusState, CanTransport, Health, HostClock, TransportError};
 
 use propid_drive_proto::{Machine, StopReason};
@@ -44,7 +47,7 @@ const MAX_WAIT: Duration = Duration::from_millis(20);
 pub const FLUSH_BOUND: Duration = Duration::from_millis(200);
 
 /// What the loop saw of the link.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RunOutcome {
     /// Everything the machine handed over left the transport (false when the link failed or
     /// the final flush ran out of time).
@@ -53,6 +56,8 @@ pub struct RunOutcome {
     pub lost_to_fault: u64,
     /// The transport's error that ended the link, if any.
     pub link_fault: Option<String>,
+    /// What the loop's thread ran at (real-time where the OS permits it).
+    pub priority: ThreadPriority,
 }
 
 /// What a transport error means for the run.
@@ -99,6 +104,9 @@ pub fn run_realtime<M: Machine>(
     stop: &AtomicBool,
     sink: &mut dyn FnMut(M::Event) -> Result<(), String>,
 ) -> RunOutcome {
+    // A loop that waits in the run queue of a busy machine stops reading the link and sending
+    // setpoints; for the run's length the thread runs at a real-time priority where permitted.
+    let priority = raise_thread_priority();
     let mut signalled = false;
     let mut dead: Option<String> = None;
     let mut lost = 0u64;
@@ -175,5 +183,6 @@ pub fn run_realtime<M: Machine>(
         flushed,
         lost_to_fault: lost,
         link_fault: dead,
+        priority: priority.obtained().clone(),
     }
 }

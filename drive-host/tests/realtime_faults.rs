@@ -2,15 +2,22 @@
 //! other end of an in-memory bus: the adapter refuses a line (BELL), the controller goes bus-off,
 //! the device vanishes. In each: a clear stop reason, every row kept, and (where the link still
 //! works) STANDBY is the first frame after the fault.
+//!
+//! The tests wait for events, not for the clock: the fault comes once the drive has recorded 500
+//! rows, and the simulated drive is stopped once it has received the stop commands the drive
+//! says it sent. They take turns (each is a real-time pair of loops).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+use propid_drive_host::sim_drive::SimDriveThread;
+use propid_drive_proto::drive::DriveEvent;
+use propid_drive_proto::sim_drive::SimDrive;
+
 use propid_core::dsdl::Readiness;
 use propid_drive_host::drive::run_drive;
-use propid_drive_host::realtime::SystemClock;
-use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::realtime::{Clock, SystemClock};
 use propid_drive_host::stand::{Played, StandPlant};
 use propid_drive_proto::drive::DriveConfig;
 use propid_drive_proto::sim_drive::SimDriveConfig;
@@ -26,12 +33,15 @@ enum Fault {
     Vanished,
 }
 
-/// A memory bus end that turns faulty after `after` frames were sent; records what it sent
-/// (and whether the fault had happened).
+/// The real-time tests take turns.
+static REAL_TIME: Mutex<()> = Mutex::new(());
+
+/// A memory bus end that turns faulty once `armed` is raised; records what it sent (and whether
+/// the fault had been reported by then).
 struct Faulty {
     inner: MemoryBus,
     fault: Fault,
-    after: usize,
+    armed: Arc<AtomicBool>,
     sent: Arc<Mutex<Vec<(bool, Frame)>>>,
     /// The fault was reported through health() (the loop knows of it from then on).
     reported: AtomicBool,
@@ -39,7 +49,7 @@ struct Faulty {
 
 impl Faulty {
     fn faulted(&self) -> bool {
-        self.sent.lock().unwrap().len() >= self.after
+        self.armed.load(Ordering::Relaxed)
     }
 }
 
@@ -85,27 +95,22 @@ impl CanTransport for Faulty {
 }
 
 fn run(fault: Fault) {
+    let _turn = REAL_TIME.lock().unwrap_or_else(|p| p.into_inner());
     let (a, b) = MemoryBus::pair(8);
-    let stop_sim = Arc::new(AtomicBool::new(false));
-    let sim = {
-        let stop = Arc::clone(&stop_sim);
-        let mut b = b;
-        std::thread::spawn(move || {
-            run_sim_drive(
-                SimDriveConfig::example(),
-                StandPlant::boxed(StandConfig::default(), 3).unwrap(),
-                &mut b,
-                &SystemClock,
-                &stop,
-            )
-        })
-    };
+    let sim = SimDriveThread::spawn(
+        SimDrive::new(
+            SimDriveConfig::example(),
+            StandPlant::boxed(StandConfig::default(), 3).unwrap(),
+            SystemClock.now(),
+        ),
+        Box::new(b),
+    );
     let sent = Arc::new(Mutex::new(Vec::new()));
-    // About 1.5 s in: 0.5 s init, then ~1 s of pattern (11 frames per 5 ms).
+    let armed = Arc::new(AtomicBool::new(false));
     let mut t = Faulty {
         inner: a,
         fault,
-        after: 3300,
+        armed: Arc::clone(&armed),
         sent: Arc::clone(&sent),
         reported: AtomicBool::new(false),
     };
@@ -121,21 +126,39 @@ fn run(fault: Fault) {
         .unwrap(),
     );
     let mut out = Vec::new();
+    // The fault comes 1 s into the pattern (500 rows at 500 Hz).
+    let mut rows = 0;
     let outcome = run_drive(
         cfg,
         &mut t,
         &SystemClock,
         &AtomicBool::new(false),
         &mut out,
-        &mut |_| {},
+        &mut |e| {
+            if let DriveEvent::Row(_) = e {
+                rows += 1;
+                armed.store(rows >= 500, Ordering::Relaxed);
+            }
+        },
     );
-    std::thread::sleep(Duration::from_millis(50));
-    stop_sim.store(true, Ordering::Relaxed);
-    let summary = sim.join().unwrap().unwrap();
     let r = &outcome.report;
+    let (seen, summary) = sim.stop_after_stop_commands(
+        r.standby_sent,
+        r.zero_setpoints_sent,
+        Duration::from_secs(10),
+    );
+    let summary = summary.unwrap();
+    if fault != Fault::Vanished {
+        // Everything the drive says it sent reaches the simulated drive.
+        assert_eq!(
+            (seen.standby, seen.zero_setpoints),
+            (u64::from(r.standby_sent), u64::from(r.zero_setpoints_sent)),
+            "{r:?}"
+        );
+    }
     let rows = String::from_utf8(out).unwrap().lines().count() - 1;
     assert_eq!(rows as u64, r.rows, "every row reached the output");
-    assert!(rows > 100, "{rows}");
+    assert!(rows >= 500, "{rows}");
     match fault {
         Fault::Bell => assert!(
             matches!(&r.reason, StopReason::AdapterRefused(l) if l.starts_with("T106")),

@@ -1,304 +1,36 @@
 //! The drive against the simulated Telega in virtual time: the seed's whole sequence (5 s init
 //! at hi with feedback ignored, the 200 s sine at a 5 ms setpoint period, STANDBY + zero), with
-//! exact phases and row counts; congestion; and the faults of the live path.
+//! exact phases and row counts, and the same after the default soft start and a ramp;
+//! congestion; and the faults of the live path.
+
+mod common;
 
 use std::time::Duration;
 
-use propid_core::can::Frame;
-use propid_core::dsdl::{DataType, DoF3rdTs, Readiness, Vector31};
+use common::*;
+use propid_core::dsdl::{DataType, DoF3rdTs, Readiness};
 use propid_core::sample::Sample;
 use propid_core::time::Instant;
-use propid_drive_host::stand::{Played, StandPlant};
+use propid_drive_host::stand::Played;
 use propid_drive_proto::drive::{
-    Drive, DriveConfig, DriveEvent, FeedbackRow, Phase, StopReport, SNAPSHOT_SAMPLES, STOP_WINDOW,
+    Drive, DriveConfig, DriveEvent, Phase, SNAPSHOT_SAMPLES, STOP_WINDOW,
 };
-use propid_drive_proto::plant::Plant;
+use propid_drive_proto::limits::Limits;
 use propid_drive_proto::settings::{Deadman, RelativeError};
-use propid_drive_proto::sim_drive::{SimDrive, SimDriveConfig, SimDriveEvent};
+use propid_drive_proto::sim_drive::SimDrive;
 use propid_drive_proto::virtual_link::{LinkModel, VirtualLink};
 use propid_drive_proto::{Machine, StopReason};
-use propid_science::excitation::{Excitation, Pattern};
+use propid_science::excitation::Excitation;
 use propid_science::stand::StandConfig;
-
-const T0: Instant = Instant::ZERO;
-
-fn seed_excitation(init: f64, duration: f64) -> Excitation {
-    Excitation {
-        lo: 0.1,
-        hi: 0.9,
-        period: 2.0,
-        duration,
-        init_duration: init,
-        pattern: Pattern::Sine,
-    }
-}
-
-fn sim_cfg() -> SimDriveConfig {
-    SimDriveConfig::example()
-}
-
-fn stand() -> Box<dyn Plant> {
-    StandPlant::boxed(StandConfig::default(), 5).unwrap()
-}
-
-/// Everything a run produced.
-#[derive(Default)]
-struct Run {
-    rows: Vec<FeedbackRow>,
-    /// (time [µs], event) of phase events.
-    phases: Vec<(u64, &'static str)>,
-    report: Option<StopReport>,
-    published: Vec<DoF3rdTs>,
-    /// What the sim drive received, in order: (readiness or setpoint).
-    sim_inputs: Vec<(f64, SimInput)>,
-    progress: u64,
-}
-
-#[derive(Clone, Copy, Debug, PartialEq)]
-enum SimInput {
-    Readiness(u8),
-    Setpoint(f32),
-}
-
-/// A simulated drive that also logs every readiness/setpoint it receives (decoded by a second
-/// node-less path: the frames themselves, reassembled by a separate core reassembler).
-struct Observed {
-    sim: SimDrive,
-    rx: propid_core::can::Reassembler<4, 8, 128>,
-    log: Vec<(f64, SimInput)>,
-}
-
-impl Observed {
-    fn new(sim: SimDrive) -> Self {
-        let mut rx = propid_core::can::Reassembler::new(None);
-        for (subject, extent) in [
-            (10u16, Readiness::EXTENT_BYTES),
-            (24, Vector31::EXTENT_BYTES),
-        ] {
-            rx.subscribe(propid_core::can::Subscription {
-                port: propid_core::can::Port::Subject(propid_core::can::SubjectId::from_const(
-                    subject,
-                )),
-                extent,
-                transfer_id_timeout: propid_core::can::DEFAULT_TRANSFER_ID_TIMEOUT,
-            })
-            .unwrap();
-        }
-        Observed {
-            sim,
-            rx,
-            log: Vec::new(),
-        }
-    }
-}
-
-impl Machine for Observed {
-    type Event = SimDriveEvent;
-    fn handle_frame(&mut self, now: Instant, frame: &Frame) {
-        if let Ok(Some(t)) = self.rx.accept(frame) {
-            if let propid_core::can::TransferKind::Message { subject_id } = t.header.kind {
-                let input = if subject_id.get() == 10 {
-                    SimInput::Readiness(Readiness::deserialize(t.payload).unwrap().value)
-                } else {
-                    SimInput::Setpoint(Vector31::deserialize(t.payload).unwrap().value[0])
-                };
-                self.log.push((now.as_secs_f64(), input));
-            }
-        }
-        self.sim.handle_frame(now, frame)
-    }
-    fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
-        self.sim.poll_transmit(now)
-    }
-    fn handle_blocked(&mut self, now: Instant, frame: Frame) {
-        self.sim.handle_blocked(now, frame)
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        self.sim.poll_timeout()
-    }
-    fn poll_event(&mut self) -> Option<SimDriveEvent> {
-        self.sim.poll_event()
-    }
-    fn handle_fault(&mut self, now: Instant, reason: StopReason) {
-        self.sim.handle_fault(now, reason)
-    }
-    fn is_stopped(&self) -> bool {
-        self.sim.is_stopped()
-    }
-}
-
-fn drain(link: &VirtualLink, drive: &mut Tap, sim: &mut Observed, run: &mut Run) {
-    let t = link.now().as_micros();
-    let drive = &mut drive.drive;
-    while let Some(e) = drive.poll_event() {
-        match e {
-            DriveEvent::PatternStarted => run.phases.push((t, "pattern")),
-            DriveEvent::Row(r) => run.rows.push(r),
-            DriveEvent::Progress(_) => run.progress += 1,
-            DriveEvent::Stopping(_) => run.phases.push((t, "stopping")),
-            DriveEvent::Stopped(r) => {
-                run.phases.push((t, "stopped"));
-                run.report = Some(r);
-            }
-            DriveEvent::RegisterWritten { .. } => {}
-        }
-    }
-    while let Some(e) = sim.poll_event() {
-        if let SimDriveEvent::Feedback(fb) = e {
-            run.published.push(fb);
-        }
-    }
-}
-
-/// Runs until the drive stops, then 50 ms more so the last frames arrive; `fault` may act on
-/// the machines at each step (returning true once it acted).
-fn run_pair(
-    cfg: DriveConfig,
-    model: LinkModel,
-    fault: &mut dyn FnMut(&mut VirtualLink, &mut Drive, &mut Observed) -> bool,
-) -> (Run, Observed, VirtualLink) {
-    let mut drive = Tap {
-        drive: Drive::new(cfg, T0),
-        first_stop_frames: Vec::new(),
-        last_recorded: false,
-    };
-    let mut sim = Observed::new(SimDrive::new(sim_cfg(), stand(), T0));
-    let mut link = VirtualLink::new(model, T0);
-    let mut run = Run::default();
-    let mut acted = false;
-    while !drive.is_stopped() {
-        assert!(link.step(&mut drive, &mut sim), "the drive planned nothing");
-        drain(&link, &mut drive, &mut sim, &mut run);
-        if !acted {
-            acted = fault(&mut link, &mut drive.drive, &mut sim);
-            drain(&link, &mut drive, &mut sim, &mut run);
-        }
-    }
-    let end = link.now() + Duration::from_millis(50);
-    while link.now() < end && link.step(&mut drive, &mut sim) {
-        drain(&link, &mut drive, &mut sim, &mut run);
-    }
-    run.sim_inputs = sim.log.clone();
-    assert_first_frames_are_stop_commands(&drive.first_stop_frames);
-    (run, sim, link)
-}
-
-/// The rows are exactly a contiguous run of what the simulated stand published.
-fn assert_rows_are_published(run: &Run) {
-    let first = run.rows.first().expect("rows").sample;
-    let k = run
-        .published
-        .iter()
-        .position(|fb| Sample::from(fb).t == first.t)
-        .expect("the first row was published");
-    for (i, row) in run.rows.iter().enumerate() {
-        let fb = &run.published[k + i];
-        // Through the wire: what DoF3rdTs carries (float16 fields are rounded by it).
-        let mut buf = [0u8; DoF3rdTs::MAX_SIZE_BYTES];
-        fb.serialize(&mut buf);
-        let wire = Sample::from(&DoF3rdTs::deserialize(&buf).unwrap());
-        assert_eq!(row.sample, wire, "row {i}");
-    }
-}
-
-/// After the stop began, once frames already on the wire have arrived, the simulated drive
-/// receives STANDBY, then a zero setpoint, and nothing but STANDBY / zero after.
-fn assert_standby_first(run: &Run, stop_at: f64) {
-    let after: Vec<SimInput> = run
-        .sim_inputs
-        .iter()
-        .filter(|(t, _)| *t > stop_at)
-        .map(|(_, i)| *i)
-        .skip_while(|i| *i != SimInput::Readiness(Readiness::STANDBY))
-        .collect();
-    assert!(after.len() >= 2, "stop commands arrived: {after:?}");
-    assert_eq!(
-        after[0],
-        SimInput::Readiness(Readiness::STANDBY),
-        "{after:?}"
-    );
-    assert_eq!(after[1], SimInput::Setpoint(0.0), "{after:?}");
-    assert!(
-        after.iter().all(|i| matches!(
-            i,
-            SimInput::Readiness(Readiness::STANDBY) | SimInput::Setpoint(0.0)
-        )),
-        "{after:?}"
-    );
-}
-
-fn stopping_at(run: &Run) -> f64 {
-    run.phases
-        .iter()
-        .find(|(_, p)| *p == "stopping")
-        .expect("stopping")
-        .0 as f64
-        * 1e-6
-}
-
-/// The drive, and the first frames it emitted once stopping.
-struct Tap {
-    drive: Drive,
-    first_stop_frames: Vec<Frame>,
-    last_recorded: bool,
-}
-
-impl Machine for Tap {
-    type Event = DriveEvent;
-    fn handle_frame(&mut self, now: Instant, frame: &Frame) {
-        self.drive.handle_frame(now, frame)
-    }
-    fn poll_transmit(&mut self, now: Instant) -> Option<Frame> {
-        let f = self.drive.poll_transmit(now)?;
-        self.last_recorded =
-            self.drive.phase() == Phase::Stopping && self.first_stop_frames.len() < 11;
-        if self.last_recorded {
-            self.first_stop_frames.push(f.clone());
-        }
-        Some(f)
-    }
-    fn handle_blocked(&mut self, now: Instant, frame: Frame) {
-        // Refused: it will be offered again, and recorded then.
-        if std::mem::take(&mut self.last_recorded) {
-            self.first_stop_frames.pop();
-        }
-        self.drive.handle_blocked(now, frame)
-    }
-    fn poll_timeout(&self) -> Option<Instant> {
-        self.drive.poll_timeout()
-    }
-    fn poll_event(&mut self) -> Option<DriveEvent> {
-        self.drive.poll_event()
-    }
-    fn handle_fault(&mut self, now: Instant, reason: StopReason) {
-        self.drive.handle_fault(now, reason)
-    }
-    fn is_stopped(&self) -> bool {
-        self.drive.is_stopped()
-    }
-}
-
-/// The first frame the drive emitted once stopping is STANDBY, then comes the zero setpoint.
-fn assert_first_frames_are_stop_commands(frames: &[Frame]) {
-    let ids: Vec<u32> = frames.iter().map(|f| f.id() >> 8 & 0x1FFF).collect();
-    assert_eq!(frames.len(), 11, "{ids:?}");
-    assert_eq!(frames[0].id() >> 8 & 0x1FFF, 10, "readiness first");
-    assert_eq!(frames[0].data()[0], Readiness::STANDBY);
-    let mut payload = Vec::new();
-    for f in &frames[1..] {
-        assert_eq!(f.id() >> 8 & 0x1FFF, 24, "then the setpoint {ids:?}");
-        payload.extend_from_slice(&f.data()[..f.data().len() - 1]);
-    }
-    assert_eq!(
-        Vector31::deserialize(&payload[..62]).unwrap(),
-        Vector31::splat(0.0)
-    );
-}
 
 #[test]
 fn the_seed_sequence_in_virtual_time() {
     let t = std::time::Instant::now();
-    let cfg = DriveConfig::example(Played::try_from(seed_excitation(5.0, 200.0)).unwrap());
+    // The seed's sequence exactly: no soft start, no ramp, no watchdog.
+    let cfg = DriveConfig {
+        limits: Limits::OFF,
+        ..DriveConfig::example(Played::try_from(seed_excitation(5.0, 200.0)).unwrap())
+    };
     let (run, sim, link) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
     let wall = t.elapsed();
     let report = run.report.clone().unwrap();
@@ -352,6 +84,59 @@ fn the_seed_sequence_in_virtual_time() {
     eprintln!("the seed sequence took {wall:?} of wall time");
 }
 
+/// The default limits with a ramp: 1 s at 0.1 (the soft start), 1 s ramping to 0.9, then the
+/// seed's init and pattern, exactly on time, every row recorded and no limit tripped.
+#[test]
+fn the_soft_start_and_a_ramp_come_before_the_seeds_init() {
+    let cfg = DriveConfig {
+        limits: Limits {
+            ramp: Some(propid_drive_proto::settings::RampDuration::new(1.0).unwrap()),
+            ..Limits::DEFAULT
+        },
+        ..DriveConfig::example(Played::try_from(seed_excitation(5.0, 20.0)).unwrap())
+    };
+    let (run, _, _) = run_pair(cfg, LinkModel::ideal(), &mut |_, _, _| true);
+    let report = run.report.clone().unwrap();
+    assert_eq!(report.reason, StopReason::Completed);
+    assert_eq!(
+        run.phases,
+        vec![
+            (1_000_000, "soft start passed"),
+            (7_000_000, "pattern"),
+            (27_000_000, "stopping"),
+            (27_020_000, "stopped")
+        ]
+    );
+    assert_eq!(run.rows.len(), 10_000);
+    assert_rows_are_published(&run);
+    let sp: Vec<(f64, f32)> = run
+        .sim_inputs
+        .iter()
+        .filter_map(|(t, i)| match i {
+            SimInput::Setpoint(v) => Some((*t, *v)),
+            _ => None,
+        })
+        .collect();
+    // float16 on the wire: 0.1 → 0.0999756, 0.9 → 0.8999023.
+    let window = |from: f64, to: f64| -> Vec<f32> {
+        sp.iter()
+            .filter(|(t, _)| (from..to).contains(t))
+            .map(|x| x.1)
+            .collect()
+    };
+    let soft = window(0.0, 1.0);
+    assert_eq!(soft.len(), 200);
+    assert!(soft.iter().all(|v| (v - 0.1).abs() < 1e-3), "{soft:?}");
+    let ramp = window(1.0, 2.0);
+    assert_eq!(ramp.len(), 200);
+    assert!(ramp.windows(2).all(|w| w[1] >= w[0]), "{ramp:?}");
+    assert!(ramp[0] < 0.11 && ramp[199] > 0.89, "{ramp:?}");
+    let init = window(2.0, 7.0);
+    assert_eq!(init.len(), 1000);
+    assert!(init.iter().all(|v| (v - 0.9).abs() < 1e-3));
+    assert_standby_first(&run, 27.0);
+}
+
 #[test]
 fn the_same_run_twice_is_the_same() {
     let cfg = DriveConfig::example(Played::try_from(seed_excitation(1.0, 5.0)).unwrap());
@@ -399,10 +184,6 @@ fn congestion_drops_frames_but_the_run_completes_and_standby_arrives() {
     assert_eq!(sim.sim.summary().last_readiness, Some(Readiness::STANDBY));
     assert_eq!(sim.sim.summary().last_setpoint, Some(0.0));
     assert!(report.stop_commands_sent(true));
-}
-
-fn at(t: f64) -> impl FnMut(&mut VirtualLink) -> bool {
-    move |link: &mut VirtualLink| link.now().as_secs_f64() >= t
 }
 
 #[test]
@@ -464,7 +245,8 @@ fn a_clock_jump_stops_the_run_with_standby_first() {
         let mut drive = Drive::new(cfg, T0);
         let mut sim = SimDrive::new(sim_cfg(), stand(), T0);
         let mut link = VirtualLink::new(LinkModel::ideal(), T0);
-        while link.now() < Instant::from_micros(3_000_000) {
+        let at = 3.0 + SOFT;
+        while link.now() < Instant::from_micros((at * 1e6) as u64) {
             link.step(&mut drive, &mut sim);
         }
         while drive.poll_event().is_some() {}
@@ -475,13 +257,13 @@ fn a_clock_jump_stops_the_run_with_standby_first() {
         assert_eq!(snap.recent.len(), SNAPSHOT_SAMPLES);
         assert_eq!(snap.rows, drive.rows());
         assert!(snap.rows >= SNAPSHOT_SAMPLES as u64, "{}", snap.rows);
-        assert!((snap.recent.last().unwrap().t - 2.998).abs() < 1e-9);
+        assert!((snap.recent.last().unwrap().t - (at - 0.002)).abs() < 1e-9);
         let est = snap
             .estimate
             .expect("two seconds of the sine identify the load");
         assert!(est.j_stderr > 0.0 && est.j_stderr < 0.1 * est.j, "{est:?}");
         assert_eq!(snap.tx.dropped, 0);
-        let jumped = Instant::from_micros((3_000_000.0 + step * 1e6) as u64);
+        let jumped = Instant::from_micros(((at + step) * 1e6) as u64);
         let first = drive.poll_transmit(jumped).expect("a frame after the jump");
         assert_eq!(drive.phase(), Phase::Stopping);
         // STANDBY is the first frame after the fault.
@@ -518,7 +300,7 @@ fn a_fault_from_the_loop_puts_standby_first_and_keeps_rows() {
         StopReason::DeviceVanished("slcan:/dev/pts/9".into()),
         StopReason::Signal,
     ] {
-        let mut when = at(2.5);
+        let mut when = at(2.5 + SOFT);
         let r = reason.clone();
         let (run, _, _) = run_pair(
             DriveConfig::example(Played::try_from(seed_excitation(1.0, 10.0)).unwrap()),

@@ -3,11 +3,16 @@
 //! ```text
 //!  DriveConfig: every number and ID typed, so a configuration out of range cannot be built
 //!  Drive::new(cfg, now)
-//!  phases: Init (at hi, feedback ignored) → Pattern (rows recorded) → Stopping → Stopped
+//!  phases: SoftStart (a low setpoint; feedback and the direction checked, crate::limits)
+//!          → Ramp (optional, to hi) → Init (at hi, no rows) → Pattern (rows recorded)
+//!          → Stopping → Stopped
+//!  every feedback sample from the soft start on: the limits (maximum speed, speed watchdog)
+//!  and, once feedback has come, the dead-man
 //!  every setpoint period: Readiness ENGAGED + Vector31 setpoint ─► Node (deadline 2 periods;
 //!                         a newer setpoint supersedes a queued one)
 //!  handle_frame: DoF3rdTs ─► DriveEvent::Row   Heartbeat of the drive ─► reboot check
-//!  stop (end, signal, deadman, reboot, clock jump, bus-off, BELL, vanished device, output error):
+//!  stop (end, signal, deadman, a limit, reboot, clock jump, bus-off, BELL, vanished device,
+//!        output error):
 //!    purge the queue, STANDBY + zero first, re-sent STOP_REPEATS times within STOP_WINDOW
 //! ```
 //!
@@ -27,6 +32,8 @@ use propid_core::sample::Sample;
 use propid_core::time::Instant;
 
 use crate::excitation::Excitation;
+use crate::feedback_loss::{FeedbackLoss, LossCounter};
+use crate::limits::{Guard, Limits, SoftStartPassed};
 use crate::machine::{Machine, StopReason};
 use crate::node::{ends_transfer, subject_of, HostNode, HostRegistry};
 use crate::registers::{
@@ -71,12 +78,15 @@ pub struct DriveConfig {
     /// Stop (with STANDBY, as always) once the relative standard errors of J and c2 are both at
     /// most this (checked once a second); `None`: run the whole pattern.
     pub until_rel_stderr: Option<RelativeError>,
+    /// The limits that stop a runaway rotor (soft start, maximum speed, watchdog, ramp).
+    pub limits: Limits,
 }
 
 impl DriveConfig {
     /// The seed document's example set-up playing `excitation`: node 10, readiness on subject
     /// 10, setpoint on 24, feedback on 110, Classic CAN, a setpoint every 5 ms, a 0.5 s deadman,
-    /// no running fit.
+    /// no running fit, the default limits ([`Limits::DEFAULT`]: a 1 s soft start at 0.1 before
+    /// the init phase, the speed watchdog).
     pub fn example(excitation: impl Excitation + 'static) -> Self {
         DriveConfig {
             node_id: NodeId::from_const(10),
@@ -90,6 +100,7 @@ impl DriveConfig {
             deadman: Deadman::DEFAULT,
             fit: false,
             until_rel_stderr: None,
+            limits: Limits::DEFAULT,
         }
     }
 }
@@ -110,6 +121,7 @@ pub fn drive_registers(cfg: &DriveConfig, persistent: bool) -> HostRegistry {
         deadman: _,
         fit: _,
         until_rel_stderr: _,
+        limits,
     } = cfg;
     let mut r = registers::drive_defaults(persistent);
     let s = excitation.schedule();
@@ -128,13 +140,21 @@ pub fn drive_registers(cfg: &DriveConfig, persistent: bool) -> HostRegistry {
     set(&mut r, DRIVE_READINESS_ID, readiness);
     set(&mut r, DRIVE_SETPOINT_ID, n16(Some(setpoint_id.get())));
     set(&mut r, DRIVE_FEEDBACK_ID, n16(Some(feedback_id.get())));
+    for (name, value) in registers::limit_values(limits) {
+        set(&mut r, name, real64(&[value]));
+    }
     r
 }
 
 /// Where the run is.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
-    /// At the high setpoint, feedback ignored (the seed's init phase).
+    /// The soft start: a low setpoint that must produce feedback and speed the rotor up the
+    /// commanded way.
+    SoftStart,
+    /// From the soft start's setpoint to the high one.
+    Ramp,
+    /// At the high setpoint, no rows recorded (the seed's init phase).
     Init,
     /// Playing the pattern and recording.
     Pattern,
@@ -183,6 +203,8 @@ pub struct Progress {
     pub feedback_per_s: u64,
     /// Received transfers the reassembler rejected so far.
     pub dropped_transfers: u64,
+    /// Feedback transfers lost on their way so far (gaps during the pattern).
+    pub feedback_lost: FeedbackLoss,
     /// Transmit counters so far.
     pub tx: TxCounters,
     /// The running estimate, when `fit` is on and the data identify it.
@@ -196,6 +218,13 @@ pub struct StopReport {
     pub reason: StopReason,
     /// Rows recorded.
     pub rows: u64,
+    /// Feedback transfers lost on their way during the pattern (gaps in transfer-IDs and in
+    /// the drive's timestamps).
+    pub feedback_lost: FeedbackLoss,
+    /// Received frames the reassembler discarded as parts of damaged transfers (a lost start, a
+    /// bad toggle, transfer-ID or CRC, no free session); frames of ports nobody subscribed to are
+    /// not counted.
+    pub damaged_frames: u64,
     /// STANDBY readiness messages handed to the link (0 when no readiness subject is set).
     pub standby_sent: u32,
     /// Whole zero-setpoint transfers handed to the link.
@@ -223,9 +252,26 @@ pub struct FeedbackRow {
     pub sample: Sample,
 }
 
+/// Frames the reassembler discarded as parts of damaged transfers.
+fn damaged_frames(rx: &propid_core::can::RxStats) -> u64 {
+    use propid_core::can::RxError;
+    [
+        RxError::MissingStart,
+        RxError::BadToggle,
+        RxError::WrongTransferId,
+        RxError::BadCrc,
+        RxError::OutOfSessions,
+    ]
+    .into_iter()
+    .map(|e| rx.rejected(e))
+    .sum()
+}
+
 /// What the drive reports while it runs.
 #[derive(Clone, Debug, PartialEq)]
 pub enum DriveEvent {
+    /// The soft start passed: feedback came and the rotor sped up the commanded way.
+    SoftStartPassed(SoftStartPassed),
     /// The init phase is over and recording begins.
     PatternStarted,
     /// One feedback row: write it (and flush it) before the next.
@@ -268,6 +314,8 @@ pub struct DriveSnapshot {
     pub tx: TxCounters,
     /// Received transfers rejected.
     pub dropped_transfers: u64,
+    /// Feedback transfers lost on their way during the pattern.
+    pub feedback_lost: FeedbackLoss,
 }
 
 struct Stopping {
@@ -282,8 +330,13 @@ pub struct Drive {
     cfg: DriveConfig,
     node: HostNode,
     phase: Phase,
+    soft_start_end: Instant,
+    ramp_end: Instant,
     init_end: Instant,
     pattern_start: Option<Instant>,
+    /// Feedback arrived at least once (the dead-man watches from then on).
+    fed: bool,
+    guard: Guard,
     next_publish: Instant,
     last_feedback: Instant,
     last_now: Instant,
@@ -294,6 +347,7 @@ pub struct Drive {
     would_block: u64,
     held_dropped: u64,
     rows: u64,
+    loss: LossCounter,
     estimator: LoadEstimator<f64>,
     next_progress: Instant,
     rows_at_progress: u64,
@@ -327,14 +381,31 @@ impl Drive {
             Heartbeat::EXTENT_BYTES,
         );
         registers::serve(&mut node, registers, &[], now);
-        let init_end = now + cfg.excitation.schedule().init_duration.duration();
+        let limits = cfg.limits;
+        let soft_start_end = now
+            + limits
+                .soft_start
+                .map_or(Duration::ZERO, |s| s.duration.duration());
+        let ramp_end = soft_start_end + limits.ramp.map_or(Duration::ZERO, |r| r.duration());
+        let init_end = ramp_end + cfg.excitation.schedule().init_duration.duration();
+        let phase = if limits.soft_start.is_some() {
+            Phase::SoftStart
+        } else if limits.ramp.is_some() {
+            Phase::Ramp
+        } else {
+            Phase::Init
+        };
         Drive {
             drive_id: cfg.drive_node_id,
             cfg,
             node,
-            phase: Phase::Init,
+            phase,
+            soft_start_end,
+            ramp_end,
             init_end,
             pattern_start: None,
+            fed: false,
+            guard: Guard::new(limits),
             next_publish: now,
             last_feedback: now,
             last_now: now,
@@ -344,6 +415,7 @@ impl Drive {
             would_block: 0,
             held_dropped: 0,
             rows: 0,
+            loss: LossCounter::new(),
             estimator: LoadEstimator::new(),
             next_progress: now,
             rows_at_progress: 0,
@@ -417,6 +489,7 @@ impl Drive {
             estimate: self.estimate(),
             tx: self.tx_counters(),
             dropped_transfers: self.node.stats().rx.rejected_total(),
+            feedback_lost: self.loss.loss(),
         }
     }
 
@@ -450,6 +523,51 @@ impl Drive {
         }
     }
 
+    /// The dead-man's stop, when no feedback came for longer than it allows.
+    fn lost_feedback(&self, now: Instant) -> Option<StopReason> {
+        let deadman = self.cfg.deadman.get();
+        let silent = now.saturating_duration_since(self.last_feedback);
+        (silent.as_secs_f64() > deadman).then_some(StopReason::LostFeedback { deadman })
+    }
+
+    /// Torque is commanded (the soft start to the end of the pattern).
+    fn is_driving(&self) -> bool {
+        matches!(
+            self.phase,
+            Phase::SoftStart | Phase::Ramp | Phase::Init | Phase::Pattern
+        )
+    }
+
+    /// The soft start's setpoint: its magnitude in the direction of `hi`, at most |hi|.
+    fn soft_start_setpoint(&self) -> f64 {
+        let hi = self.cfg.excitation.schedule().range.hi();
+        let magnitude = self.cfg.limits.soft_start.map_or(0.0, |s| s.setpoint.get());
+        magnitude
+            .min(hi.abs())
+            .copysign(if hi < 0.0 { -1.0 } else { 1.0 })
+    }
+
+    /// The setpoint the phase commands at `now`.
+    fn setpoint_at(&self, now: Instant) -> f64 {
+        let hi = self.cfg.excitation.schedule().range.hi();
+        match self.phase {
+            Phase::SoftStart => self.soft_start_setpoint(),
+            Phase::Ramp => {
+                let from = self.soft_start_setpoint();
+                let total = self.ramp_end.saturating_duration_since(self.soft_start_end);
+                let done = now.saturating_duration_since(self.soft_start_end);
+                let x = if total.is_zero() {
+                    1.0
+                } else {
+                    (done.as_secs_f64() / total.as_secs_f64()).min(1.0)
+                };
+                from + (hi - from) * x
+            }
+            Phase::Pattern => self.cfg.excitation.setpoint(self.elapsed(now)),
+            _ => hi,
+        }
+    }
+
     fn publish(&mut self, now: Instant, readiness: u8, setpoint: f32, deadline: Duration) {
         // A full queue refuses (counted in the node's stats); nothing else can fail here.
         if let Some(id) = self.cfg.readiness_id {
@@ -474,6 +592,35 @@ impl Drive {
 
     /// Moves the phases along: pattern start, end, deadman, setpoints, stop repeats, progress.
     fn advance(&mut self, now: Instant) {
+        if self.phase == Phase::SoftStart && now >= self.soft_start_end {
+            match self
+                .guard
+                .end_soft_start(self.soft_start_setpoint(), self.cfg.feedback_id.get())
+            {
+                Ok(passed) => {
+                    self.events.push_back(DriveEvent::SoftStartPassed(passed));
+                    self.phase = if now < self.ramp_end {
+                        Phase::Ramp
+                    } else {
+                        Phase::Init
+                    };
+                }
+                Err(limit) => {
+                    self.stop(now, StopReason::Limit(limit));
+                    return;
+                }
+            }
+        }
+        if self.phase == Phase::Ramp && now >= self.ramp_end {
+            self.phase = Phase::Init;
+        }
+        // Before the pattern, the dead-man watches once feedback has come.
+        if matches!(self.phase, Phase::SoftStart | Phase::Ramp | Phase::Init) && self.fed {
+            if let Some(lost) = self.lost_feedback(now) {
+                self.stop(now, lost);
+                return;
+            }
+        }
         if self.phase == Phase::Init && now >= self.init_end {
             self.phase = Phase::Pattern;
             self.pattern_start = Some(self.init_end);
@@ -485,17 +632,8 @@ impl Drive {
             let elapsed = self.elapsed(now);
             if elapsed >= self.cfg.excitation.schedule().duration.get() {
                 self.stop(now, StopReason::Completed);
-            } else if now
-                .saturating_duration_since(self.last_feedback)
-                .as_secs_f64()
-                > self.cfg.deadman.get()
-            {
-                self.stop(
-                    now,
-                    StopReason::LostFeedback {
-                        deadman: self.cfg.deadman.get(),
-                    },
-                );
+            } else if let Some(lost) = self.lost_feedback(now) {
+                self.stop(now, lost);
             } else if now >= self.next_progress {
                 let precise = self.cfg.until_rel_stderr.and_then(|target| {
                     let target = target.get();
@@ -514,11 +652,19 @@ impl Drive {
                     );
                     return;
                 }
+                // The running fit's inertia bounds the watchdog once it is identified (inside
+                // its bounds: a J pinned at the largest one says nothing).
+                if let Ok(e) = self.estimator.estimate(&LoadBounds::default()) {
+                    if !e.at_bound[0] {
+                        self.guard.model_inertia(e.mass, e.mass_stderr);
+                    }
+                }
                 let estimate = if self.cfg.fit { self.estimate() } else { None };
                 self.events.push_back(DriveEvent::Progress(Progress {
                     elapsed,
                     feedback_per_s: self.rows - self.rows_at_progress,
                     dropped_transfers: self.node.stats().rx.rejected_total(),
+                    feedback_lost: self.loss.loss(),
                     tx: self.tx_counters(),
                     estimate,
                 }));
@@ -529,11 +675,8 @@ impl Drive {
                 }
             }
         }
-        if matches!(self.phase, Phase::Init | Phase::Pattern) && now >= self.next_publish {
-            let sp = match self.pattern_start {
-                None => self.cfg.excitation.schedule().range.hi(),
-                Some(_) => self.cfg.excitation.setpoint(self.elapsed(now)),
-            };
+        if self.is_driving() && now >= self.next_publish {
+            let sp = self.setpoint_at(now);
             self.publish(now, Readiness::ENGAGED, sp as f32, self.setpoint_deadline());
             let period = self.cfg.setpoint_period.duration();
             self.next_publish = self.next_publish + period;
@@ -594,6 +737,8 @@ impl Drive {
         self.events.push_back(DriveEvent::Stopped(StopReport {
             reason,
             rows: self.rows,
+            feedback_lost: self.loss.loss(),
+            damaged_frames: damaged_frames(&self.node.stats().rx),
             standby_sent: self.standby_sent,
             zero_setpoints_sent: self.zero_setpoints_sent,
             tx: self.tx_counters(),
@@ -633,13 +778,14 @@ impl Drive {
             subject_id,
             source,
             timestamp,
+            transfer_id,
             payload,
             ..
         }) = self.node.handle_frame(now, frame)
         {
             if subject_id == feedback_id {
                 if let Ok(fb) = DoF3rdTs::deserialize(payload) {
-                    feedback = Some((timestamp, source, fb));
+                    feedback = Some((timestamp, source, transfer_id, fb));
                 }
             } else if subject_id.get() == Heartbeat::FIXED_SUBJECT_ID {
                 if let (Some(src), Ok(hb)) = (source, Heartbeat::deserialize(payload)) {
@@ -670,16 +816,32 @@ impl Drive {
                 self.drive_uptime = Some(uptime);
             }
         }
-        let Some((timestamp, source, fb)) = feedback else {
+        let Some((timestamp, source, transfer_id, fb)) = feedback else {
             return;
         };
         if self.drive_id.is_none() {
             self.drive_id = source;
         }
-        // Feedback during the init phase is flushed, as the seed does.
+        if !self.is_driving() {
+            return;
+        }
+        self.last_feedback = now;
+        self.fed = true;
+        let sample = Sample::from(&fb);
+        let soft_start = (self.phase == Phase::SoftStart).then(|| self.soft_start_setpoint());
+        let stamped = fb.timestamp.microsecond != 0;
+        if let Some(limit) = self
+            .guard
+            .feedback(&sample, stamped, now.as_secs_f64(), soft_start)
+        {
+            self.stop(now, StopReason::Limit(limit));
+            return;
+        }
+        // Feedback before the pattern is not recorded, as the seed does.
         if self.phase == Phase::Pattern {
-            self.last_feedback = now;
-            let sample = Sample::from(&fb);
+            if source == self.drive_id {
+                self.loss.observe(transfer_id, fb.timestamp.microsecond);
+            }
             self.rows += 1;
             if sample.is_finite() {
                 self.estimator
@@ -778,7 +940,16 @@ impl Drive {
                     }
                     _ => {
                         let mut t = t.min(self.next_publish);
+                        if self.fed && self.phase != Phase::Pattern {
+                            t = t.min(
+                                self.last_feedback
+                                    + self.cfg.deadman.duration()
+                                    + Duration::from_micros(1),
+                            );
+                        }
                         match self.phase {
+                            Phase::SoftStart => t = t.min(self.soft_start_end),
+                            Phase::Ramp => t = t.min(self.ramp_end),
                             Phase::Init => t = t.min(self.init_end),
                             _ => {
                                 let deadman = self.last_feedback

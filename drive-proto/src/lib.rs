@@ -19,6 +19,7 @@
 //!  poll_timeout()               when to call again (the next setpoint, heartbeat or retry)
 //!  poll_event()                 phases, rows, progress, the stop and its report
 //!  handle_fault(now, reason)    signal, transport fault, bus-off, output error ⇒ the stop sequence
+//!  every feedback sample        the limits (crate::limits); one that trips ⇒ the stop sequence
 //!  stop sequence: purge the queue ─► STANDBY + zero setpoint first, re-sent STOP_REPEATS times
 //!                 within STOP_WINDOW ─► Stopped(StopReport)
 //! ```
@@ -26,11 +27,13 @@
 //! The modules, each importing only those above it:
 //!
 //! ```text
-//!  settings     the machines' settings as types (SetpointPeriod, SetpointRange, …): out of range
-//!               cannot be built, so no machine validates its configuration
+//!  settings     the machines' settings as types (SetpointPeriod, SetpointRange, MaxSpeed, …): out
+//!               of range cannot be built, so no machine validates its configuration
 //!  excitation   the pattern behind a trait (Schedule: the seed's timing registers)
-//!  plant        the simulated load behind a trait
+//!  plant        the simulated load behind a trait (TorqueScaled: a motor wired the other way)
 //!  node         HostNode, HostRegistry: the Cyphal node the machines are built on
+//!  feedback_loss  lost feedback counted from transfer-IDs and the drive's timestamps
+//!  limits       the limits that stop a runaway rotor: soft start, maximum speed, speed watchdog
 //!  machine      Machine (the Sans-IO contract) and StopReason
 //!  registers    register names, types and defaults; serving them; Telega's prerequisites
 //!  drive, sim_drive, telega    the three machines (each maps its configuration onto registers)
@@ -45,6 +48,8 @@
 
 pub mod drive;
 pub mod excitation;
+pub mod feedback_loss;
+pub mod limits;
 pub mod machine;
 pub mod node;
 pub mod plant;

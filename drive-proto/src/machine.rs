@@ -5,6 +5,8 @@
 use propid_core::can::Frame;
 use propid_core::time::Instant;
 
+use crate::limits::LimitStop;
+
 /// A Sans-IO machine that a real-time loop and [`crate::virtual_link`] can drive.
 pub trait Machine {
     /// What it reports to its caller.
@@ -74,6 +76,8 @@ pub enum StopReason {
     Transport(String),
     /// The recording could not be written.
     Output(String),
+    /// A limit stopped the rotor (soft start, maximum speed, speed watchdog).
+    Limit(LimitStop),
 }
 
 impl StopReason {
@@ -120,6 +124,7 @@ impl std::fmt::Display for StopReason {
             StopReason::DeviceVanished(what) => write!(f, "the device vanished: {what}"),
             StopReason::Transport(e) => write!(f, "transport error: {e}"),
             StopReason::Output(e) => write!(f, "cannot write the recording: {e}"),
+            StopReason::Limit(l) => write!(f, "{l}"),
         }
     }
 }

@@ -9,7 +9,9 @@
 //!
 //! - `propid drive` has the seed's PyCyphal registers: `setpoint_rat_lo_hi` (`real64[2]`, as
 //!   PyCyphal's `setdefault(…, [0.1, 0.9])` makes it), `period`, `pattern_duration`,
-//!   `init_duration`, `setpoint_period` (`real64[1]`), `uavcan.node.id` (`natural16[1]`, 65535
+//!   `init_duration`, `setpoint_period` (`real64[1]`), and the limits `max_speed`,
+//!   `soft_start_setpoint`, `soft_start_duration`, `ramp_duration`, `speed_watchdog` (`real64[1]`,
+//!   0 = off, rad/s and s), `uavcan.node.id` (`natural16[1]`, 65535
 //!   unset), `uavcan.node.description`, and for each port `uavcan.{pub,sub}.NAME.id`
 //!   (`natural16[1]`, 65535 unset) and the read-only `uavcan.{pub,sub}.NAME.type`.
 //! - `propid sim-drive` has Telega's (telega.zubax.com, "Cyphal interface"):
@@ -25,6 +27,7 @@ use propid_core::dsdl::Value;
 use propid_core::time::Instant;
 
 use crate::excitation::Schedule;
+use crate::limits::{Limits, SoftStart};
 use crate::node::{HostNode, HostRegistry};
 use crate::settings::SetpointPeriod;
 
@@ -57,6 +60,17 @@ pub const PATTERN_DURATION: &str = "pattern_duration";
 pub const INIT_DURATION: &str = "init_duration";
 /// The seed's setpoint publication period (`real64[1]`, s).
 pub const SETPOINT_PERIOD: &str = "setpoint_period";
+
+/// The highest speed allowed (`real64[1]`, rad/s; 0: none).
+pub const MAX_SPEED: &str = "max_speed";
+/// The soft start's setpoint magnitude (`real64[1]`, ratiometric, in the direction of hi).
+pub const SOFT_START_SETPOINT: &str = "soft_start_setpoint";
+/// How long the soft start lasts (`real64[1]`, s; 0: no soft start).
+pub const SOFT_START_DURATION: &str = "soft_start_duration";
+/// How long the ramp to hi after the soft start lasts (`real64[1]`, s; 0: no ramp).
+pub const RAMP_DURATION: &str = "ramp_duration";
+/// The speed watchdog's margin (`real64[1]`, rad/s; 0: off).
+pub const SPEED_WATCHDOG: &str = "speed_watchdog";
 
 /// The drive's setpoint register (`uavcan.pub.sp_rat.id`), as the seed names its port.
 pub const DRIVE_SETPOINT_ID: &str = "uavcan.pub.sp_rat.id";
@@ -147,10 +161,29 @@ pub fn drive_defaults(persistent: bool) -> HostRegistry {
     );
     let period = SetpointPeriod::SEED.get();
     add(&mut r, SETPOINT_PERIOD, real64(&[period]), true, p);
+    for (name, value) in limit_values(&Limits::DEFAULT) {
+        add(&mut r, name, real64(&[value]), true, p);
+    }
     port(&mut r, "pub", "readiness", None, READINESS_TYPE, p);
     port(&mut r, "pub", "sp_rat", None, SETPOINT_TYPE, p);
     port(&mut r, "sub", "fb_dyn", None, FEEDBACK_TYPE, p);
     r
+}
+
+/// The limit registers and their values for `limits` (0 for a limit that is off; the soft
+/// start's setpoint is kept when it is off, as a register file would keep it).
+pub fn limit_values(limits: &Limits) -> [(&'static str, f64); 5] {
+    let soft = limits.soft_start;
+    [
+        (MAX_SPEED, limits.max_speed.map_or(0.0, |m| m.get())),
+        (
+            SOFT_START_SETPOINT,
+            soft.unwrap_or(SoftStart::DEFAULT).setpoint.get(),
+        ),
+        (SOFT_START_DURATION, soft.map_or(0.0, |s| s.duration.get())),
+        (RAMP_DURATION, limits.ramp.map_or(0.0, |r| r.get())),
+        (SPEED_WATCHDOG, limits.watchdog.map_or(0.0, |w| w.get())),
+    ]
 }
 
 /// The environment variable of a register: upper case, `.` → `__` (the specification's rule,

@@ -209,6 +209,73 @@ bounded!(
     ""
 );
 
+bounded!(
+    /// The highest speed the rotor may reach [rad/s] (`max_speed`), above 0 and at most 100,000.
+    MaxSpeed,
+    0.0 true,
+    1e5,
+    false,
+    "rad/s"
+);
+bounded!(
+    /// The soft start's setpoint (`soft_start_setpoint`): a ratiometric magnitude in (0, 1],
+    /// applied in the direction of `hi`.
+    SoftStartSetpoint,
+    0.0 true,
+    1.0,
+    false,
+    ""
+);
+seconds!(
+    /// How long the soft start lasts [s] (`soft_start_duration`), above 0 and at most 60.
+    SoftStartDuration,
+    0.0 true,
+    60.0
+);
+seconds!(
+    /// How long the ramp from the soft start's setpoint to `hi` lasts [s] (`ramp_duration`).
+    RampDuration,
+    0.0 true,
+    DAY
+);
+bounded!(
+    /// How far the speed may run past what the reported torque can explain before the watchdog
+    /// stops the run [rad/s] (`speed_watchdog`), above 0 and at most 100,000.
+    WatchdogMargin,
+    0.0 true,
+    1e5,
+    false,
+    "rad/s"
+);
+
+bounded!(
+    /// The torque a simulated motor makes per torque it is commanded and reports, −10 to 10: −1
+    /// reverses its sign, 0 makes none (`propid sim-drive --torque-scale`, for trying the limits).
+    TorqueScale,
+    -10.0 false,
+    10.0,
+    false,
+    ""
+);
+
+/// rad/s per rpm.
+pub const RAD_S_PER_RPM: f64 = std::f64::consts::PI / 30.0;
+
+/// A speed as people write it: rad/s by default (`1256.6`, `1256.6rad/s`) or rpm (`12000rpm`,
+/// `12000 rpm`); the value in rad/s, or `None` when the text is not one.
+pub fn parse_speed(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let (number, scale) = if let Some(n) = t.strip_suffix("rpm") {
+        (n, RAD_S_PER_RPM)
+    } else if let Some(n) = t.strip_suffix("rad/s") {
+        (n, 1.0)
+    } else {
+        (t, 1.0)
+    };
+    let v: f64 = number.trim().parse().ok()?;
+    v.is_finite().then_some(v * scale)
+}
+
 impl SetpointPeriod {
     /// The seed's: 5 ms.
     pub const SEED: SetpointPeriod = SetpointPeriod::from_const(0.005);
@@ -276,6 +343,23 @@ impl SetpointRange {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn speeds_are_read_in_rad_s_or_rpm() {
+        assert_eq!(parse_speed("1256.5"), Some(1256.5));
+        assert_eq!(parse_speed(" 300 rad/s "), Some(300.0));
+        let rpm = parse_speed("12000rpm").unwrap();
+        assert!((rpm - 1256.637).abs() < 1e-3, "{rpm}");
+        assert_eq!(parse_speed("12000 rpm"), parse_speed("12000rpm"));
+        for bad in ["", "fast", "12000 rps", "inf", "NaNrpm"] {
+            assert_eq!(parse_speed(bad), None, "{bad}");
+        }
+        assert!(MaxSpeed::new(0.0).is_err());
+        assert_eq!(
+            MaxSpeed::new(-5.0).unwrap_err().to_string(),
+            "must be a finite number above 0 and at most 100000 rad/s (got -5)"
+        );
+    }
 
     #[test]
     fn out_of_range_values_cannot_be_built() {

@@ -3,7 +3,10 @@
 //! ```text
 //!  handle_frame ─► Node ─► Readiness (torque only when ENGAGED), Vector31 setpoint
 //!  every feedback interval: Stand::advance_to(t) ─► Stand::measure ─► DoF3rdTs (device timestamp)
-//!                           ─► Node::publish ─► poll_transmit
+//!                           ─► backlog (FIFO, FEEDBACK_HOLD) ─► Node::publish, one transfer at a
+//!                              time ─► poll_transmit
+//!  a stalled caller or link: the instants it missed are sampled when it wakes and sent in order;
+//!  a sample not sent within FEEDBACK_HOLD is dropped and counted (feedback_dropped)
 //!  deadman: no setpoint for SIM_DEADMAN ⇒ zero torque
 //!  heartbeat 1 Hz with its uptime (a new SimDrive is a rebooted drive)
 //!  registers (Telega's names, see crate::registers): List/Access, port.List every 10 s
@@ -37,6 +40,14 @@ use crate::settings::{FeedbackInterval, RunLimit};
 
 /// The simulated drive zeroes its torque when no setpoint arrived for this long.
 pub const SIM_DEADMAN: Duration = Duration::from_millis(500);
+
+/// How long a feedback sample waits to be handed to the node, and then its frames to leave,
+/// before the simulated drive drops it: what a drive and its adapter buffer between a busy host's
+/// reads. A sample is never superseded by a newer one (a setpoint is; a measurement is not).
+pub const FEEDBACK_HOLD: Duration = Duration::from_millis(500);
+
+/// Feedback samples waiting to be sent, at most (0.5 s at 0.1 ms).
+const FEEDBACK_BACKLOG: usize = 5000;
 
 /// Telega's deadman timeout register (read-only here: [`SIM_DEADMAN`]).
 pub const DEADMAN_TIMEOUT: &str = "mns.deadman_timeout";
@@ -132,12 +143,25 @@ pub struct SimDriveSummary {
     pub last_setpoint: Option<f32>,
     /// Setpoints received.
     pub setpoints: u64,
-    /// Feedback messages published.
+    /// Feedback messages handed to the link.
     pub feedback_published: u64,
+    /// Feedback samples dropped unsent: not handed over within [`FEEDBACK_HOLD`] (the simulated
+    /// drive's own loop or its link stalled that long; frames that then expire in the node's
+    /// queue are counted in its transmit statistics).
+    pub feedback_dropped: u64,
     /// Restarts commanded over the bus.
     pub restarts: u64,
     /// Store commands received.
     pub stores: u64,
+}
+
+/// A command the simulated drive received.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Command {
+    /// A readiness message.
+    Readiness(u8),
+    /// A setpoint (its first element).
+    Setpoint(f32),
 }
 
 /// What the simulated drive reports.
@@ -145,6 +169,8 @@ pub struct SimDriveSummary {
 pub enum SimDriveEvent {
     /// A feedback message was queued for sending.
     Feedback(DoF3rdTs),
+    /// A readiness or setpoint message arrived (every one, in order).
+    Received(Command),
     /// The readiness received changed.
     Readiness(u8),
     /// A register was written over the bus and now holds `value` (a refused value, such as a
@@ -180,6 +206,8 @@ pub struct SimDrive {
     last_setpoint_at: Option<Instant>,
     setpoint: f64,
     summary: SimDriveSummary,
+    /// Sampled feedback not yet handed to the node, oldest first, with its sampling instant.
+    backlog: VecDeque<(Instant, DoF3rdTs)>,
     held: Option<Frame>,
     stopped: bool,
     last_now: Instant,
@@ -254,6 +282,7 @@ impl SimDrive {
             last_setpoint_at: None,
             setpoint: 0.0,
             summary: SimDriveSummary::default(),
+            backlog: VecDeque::new(),
             held: None,
             stopped: false,
             last_now: now,
@@ -347,6 +376,9 @@ impl SimDrive {
             self.cfg.readiness_id = id;
         }
         self.node = boot_node(&self.cfg, &registers, now);
+        // A reboot loses what was waiting to be sent.
+        self.summary.feedback_dropped += self.backlog.len() as u64;
+        self.backlog.clear();
         self.last_setpoint_at = None;
         self.setpoint = 0.0;
         self.summary.last_readiness = None;
@@ -388,51 +420,83 @@ impl SimDrive {
         if self.restart_at.is_some_and(|t| now >= t) {
             self.restart(now);
         }
+        // Instants FEEDBACK_HOLD old would be dropped unsent: not sampled at all.
+        while self.next_feedback + FEEDBACK_HOLD <= now {
+            self.summary.feedback_dropped += 1;
+            self.next_feedback = self.next_feedback + self.interval;
+        }
         while now >= self.next_feedback {
             let at = self.next_feedback;
-            let t = at.saturating_duration_since(self.start).as_secs_f64();
-            let engaged = match self.cfg.readiness_id {
-                Some(_) => self.summary.last_readiness == Some(Readiness::ENGAGED),
-                None => true,
-            };
-            let alive = self
-                .last_setpoint_at
-                .is_some_and(|s| at.saturating_duration_since(s) < SIM_DEADMAN);
-            self.plant
-                .set_setpoint(if engaged && alive { self.setpoint } else { 0.0 });
-            self.plant.advance_to(t);
-            let s = self.plant.measure();
-            let mut fb = DoF3rdTs::default();
-            // Without local timestamps the field is 0: "unknown" in Cyphal (this simulation has
-            // no network time to stamp with instead).
-            fb.timestamp.microsecond = if self.local_timestamp {
-                (t * 1e6).round() as u64
-            } else {
-                0
-            };
-            fb.value.kinematics.base.position = s.position as f32;
-            fb.value.kinematics.base.velocity = s.velocity as f32;
-            fb.value.kinematics.acceleration = s.acceleration as f32;
-            fb.value.force = s.force as f32;
-            if self
-                .node
-                .publish_message(
-                    now,
-                    self.cfg.feedback_id,
-                    Priority::HIGH,
-                    &fb,
-                    self.interval * 5,
-                )
-                .is_ok()
-            {
-                self.summary.feedback_published += 1;
-                self.events.push_back(SimDriveEvent::Feedback(fb));
+            let fb = self.sample_at(at);
+            if self.backlog.len() == FEEDBACK_BACKLOG {
+                self.backlog.pop_front();
+                self.summary.feedback_dropped += 1;
             }
+            self.backlog.push_back((at, fb));
             self.next_feedback = self.next_feedback + self.interval;
-            if self.next_feedback + self.interval <= now {
-                // Far behind (a stalled caller): resume from now instead of bursting.
-                self.next_feedback = now + self.interval;
+        }
+    }
+
+    /// Runs the plant to `at` and measures it as the drive would report it.
+    fn sample_at(&mut self, at: Instant) -> DoF3rdTs {
+        let t = at.saturating_duration_since(self.start).as_secs_f64();
+        let engaged = match self.cfg.readiness_id {
+            Some(_) => self.summary.last_readiness == Some(Readiness::ENGAGED),
+            None => true,
+        };
+        let alive = self
+            .last_setpoint_at
+            .is_some_and(|s| at.saturating_duration_since(s) < SIM_DEADMAN);
+        self.plant
+            .set_setpoint(if engaged && alive { self.setpoint } else { 0.0 });
+        if t > self.plant.time() {
+            self.plant.advance_to(t);
+        }
+        let s = self.plant.measure();
+        let mut fb = DoF3rdTs::default();
+        // Without local timestamps the field is 0: "unknown" in Cyphal (this simulation has
+        // no network time to stamp with instead).
+        fb.timestamp.microsecond = if self.local_timestamp {
+            (t * 1e6).round() as u64
+        } else {
+            0
+        };
+        fb.value.kinematics.base.position = s.position as f32;
+        fb.value.kinematics.base.velocity = s.velocity as f32;
+        fb.value.kinematics.acceleration = s.acceleration as f32;
+        fb.value.force = s.force as f32;
+        fb
+    }
+
+    /// Hands the oldest waiting feedback sample to the node once the node has sent everything
+    /// before it (one transfer at a time, so none supersedes another); samples older than
+    /// [`FEEDBACK_HOLD`] are dropped and counted.
+    fn offer_feedback(&mut self, now: Instant) {
+        if self.held.is_some() || !self.node.is_transmit_queue_empty() {
+            return;
+        }
+        while let Some((at, fb)) = self.backlog.pop_front() {
+            if now >= at + FEEDBACK_HOLD {
+                self.summary.feedback_dropped += 1;
+                continue;
             }
+            // Once handed over, its frames get the whole hold to leave: a sample handed over
+            // with only the rest of its hold would expire on a link slower than the stream, and
+            // so would every sample after it.
+            match self.node.publish_message(
+                now,
+                self.cfg.feedback_id,
+                Priority::HIGH,
+                &fb,
+                FEEDBACK_HOLD,
+            ) {
+                Ok(()) => {
+                    self.summary.feedback_published += 1;
+                    self.events.push_back(SimDriveEvent::Feedback(fb));
+                }
+                Err(_) => self.summary.feedback_dropped += 1,
+            }
+            return;
         }
     }
 
@@ -459,6 +523,8 @@ impl SimDrive {
                         self.plant.advance_to(t);
                     }
                     self.setpoint = f64::from(v.value[0]);
+                    self.events
+                        .push_back(SimDriveEvent::Received(Command::Setpoint(v.value[0])));
                     self.summary.last_setpoint = Some(v.value[0]);
                     self.summary.setpoints += 1;
                     self.last_setpoint_at = Some(now);
@@ -470,6 +536,8 @@ impl SimDrive {
                 ..
             }) if Some(subject_id) == readiness_id => {
                 if let Ok(r) = Readiness::deserialize(payload) {
+                    self.events
+                        .push_back(SimDriveEvent::Received(Command::Readiness(r.value)));
                     if self.summary.last_readiness != Some(r.value) {
                         self.summary.readiness_changes.push(r.value);
                         self.events.push_back(SimDriveEvent::Readiness(r.value));
@@ -489,6 +557,7 @@ impl SimDrive {
         if self.stopped {
             return None;
         }
+        self.offer_feedback(now);
         self.held.take().or_else(|| self.node.poll_transmit(now))
     }
 
@@ -510,6 +579,8 @@ impl SimDrive {
             t = t.min(self.last_now + Duration::from_millis(1));
         } else if let Some(n) = self.node.poll_timeout() {
             t = t.min(n);
+        } else if !self.backlog.is_empty() {
+            t = t.min(self.last_now);
         }
         if let Some(end) = self.end {
             t = t.min(end);
@@ -564,6 +635,61 @@ fn interval_of(registers: &HostRegistry) -> Option<FeedbackInterval> {
 mod tests {
     use super::*;
     use crate::registers::check_prerequisites;
+    use propid_core::sample::Sample;
+
+    /// A load that does not move.
+    struct Still(f64);
+
+    impl Plant for Still {
+        fn set_setpoint(&mut self, _: f64) {}
+        fn time(&self) -> f64 {
+            self.0
+        }
+        fn advance_to(&mut self, t: f64) {
+            self.0 = self.0.max(t);
+        }
+        fn measure(&mut self) -> Sample {
+            Sample {
+                t: self.0,
+                force: 0.0,
+                velocity: 0.0,
+                acceleration: 0.0,
+                position: 0.0,
+            }
+        }
+    }
+
+    /// Polls everything out at `now`; the feedback timestamps sent [µs].
+    fn drain(sim: &mut SimDrive, now: Instant) -> Vec<u64> {
+        while sim.poll_transmit(now).is_some() {}
+        std::iter::from_fn(|| sim.poll_event())
+            .filter_map(|e| match e {
+                SimDriveEvent::Feedback(fb) => Some(fb.timestamp.microsecond),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_stalled_loop_sends_every_instant_it_missed_in_order_within_the_hold() {
+        let mut sim = SimDrive::new(
+            SimDriveConfig::example(),
+            Box::new(Still(0.0)),
+            Instant::ZERO,
+        );
+        assert_eq!(drain(&mut sim, Instant::ZERO), [0]);
+        // 100 ms without a call: the 50 instants it slept through, in order, none superseded.
+        let sent = drain(&mut sim, Instant::from_micros(100_000));
+        assert_eq!(sent, (1..=50).map(|k| k * 2_000).collect::<Vec<u64>>());
+        assert_eq!(sim.summary().feedback_dropped, 0);
+        // 2 s without a call: only the last 0.5 s is sampled; the rest is counted as dropped.
+        let sent = drain(&mut sim, Instant::from_micros(2_100_000));
+        assert_eq!(sent.len(), 250);
+        assert_eq!(sent[0], 1_602_000);
+        assert!(sent.windows(2).all(|w| w[1] == w[0] + 2_000));
+        assert_eq!(sim.summary().feedback_dropped, 750);
+        assert_eq!(sim.summary().feedback_published, 1 + 50 + 250);
+    }
 
     #[test]
     fn prerequisites() {

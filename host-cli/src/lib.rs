@@ -67,10 +67,32 @@ pub fn os_words(e: &std::io::Error) -> String {
 /// Exit status of `propid diagnose` when the data cannot support a verdict.
 pub const EXIT_CANNOT_JUDGE: u8 = 3;
 
-/// The exit status for an error, for every command: 3 when the data cannot support a verdict,
-/// 2 for bad input (a file's content, a path that cannot be read, a flag's value), 1 otherwise.
-/// The one place where errors become exit statuses.
+/// A limit stopped the rotor (`propid drive`): exit status 4.
+#[derive(Debug)]
+pub struct LimitStopped(pub String);
+
+impl std::fmt::Display for LimitStopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "stopped by a limit: {}", self.0)
+    }
+}
+
+impl std::error::Error for LimitStopped {}
+
+/// Exit status of `propid drive` when a limit stopped the rotor (soft start, maximum speed,
+/// speed watchdog).
+pub const EXIT_LIMIT: u8 = 4;
+
+/// The exit status for an error, for every command: 4 when a limit stopped the rotor, 3 when
+/// the data cannot support a verdict, 2 for bad input (a file's content, a path that cannot be
+/// read, a flag's value), 1 otherwise. The one place where errors become exit statuses.
 pub fn exit_status_for(err: &anyhow::Error) -> u8 {
+    if err
+        .chain()
+        .any(|e| e.downcast_ref::<LimitStopped>().is_some())
+    {
+        return EXIT_LIMIT;
+    }
     use propid_io::candump::ReplayError;
     use propid_science::fit::FitError;
     // The libraries' error enums wrap bad input transparently (their `source()` is the inner

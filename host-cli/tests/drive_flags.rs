@@ -54,6 +54,17 @@ fn drive_numbers_are_checked() {
         (&["--readiness-id", "8192"], "--readiness-id"),
         (&["--setpoint-rat-lo-hi", "0.1 inf"], "setpoint"),
         (&["--setpoint-rat-lo-hi", "nan 0.5"], "setpoint"),
+        (&["--max-speed", "fast"], "--max-speed"),
+        (&["--max-speed", "nan"], "--max-speed"),
+        (&["--max-speed=-5"], "--max-speed"),
+        (&["--max-speed", "2e6rpm"], "--max-speed"),
+        (&["--soft-start-setpoint", "1.5"], "--soft-start-setpoint"),
+        (&["--soft-start-setpoint", "0"], "--soft-start-setpoint"),
+        (&["--soft-start-duration", "100"], "--soft-start-duration"),
+        (&["--soft-start-duration=-1"], "--soft-start-duration"),
+        (&["--ramp-duration", "inf"], "--ramp-duration"),
+        (&["--speed-watchdog", "nan"], "--speed-watchdog"),
+        (&["--speed-watchdog=-1"], "--speed-watchdog"),
     ] {
         let mut a = vec!["drive"];
         a.extend_from_slice(args);
@@ -74,6 +85,8 @@ fn sim_drive_numbers_are_checked() {
         (&["--feedback-id", "9000"], "--feedback-id"),
         (&["--setpoint-id", "8192"], "--setpoint-id"),
         (&["--readiness-id", "9000"], "--readiness-id"),
+        (&["--torque-scale", "20"], "--torque-scale"),
+        (&["--torque-scale", "nan"], "--torque-scale"),
     ] {
         let mut a = vec!["sim-drive"];
         a.extend_from_slice(args);

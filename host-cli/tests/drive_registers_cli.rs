@@ -5,7 +5,12 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-const VARS: [&str; 9] = [
+const VARS: [&str; 14] = [
+    "MAX_SPEED",
+    "SOFT_START_SETPOINT",
+    "SOFT_START_DURATION",
+    "RAMP_DURATION",
+    "SPEED_WATCHDOG",
     "UAVCAN__NODE__ID",
     "UAVCAN__PUB__SP_RAT__ID",
     "UAVCAN__SUB__FB_DYN__ID",
@@ -214,4 +219,69 @@ fn telega_refuses_bad_arguments_before_the_bus() {
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(!err.contains("null-not-opened"), "{err}");
     }
+}
+
+/// The limits are registers like the seed's: the defaults (a 1 s soft start at 0.1, the watchdog
+/// at 50 rad/s, no maximum speed, no ramp), a speed in rpm from the file, the environment or the
+/// flag (held in rad/s), 0 turning a limit off; a speed that is not one is refused naming where it
+/// came from.
+#[test]
+fn the_limits_are_registers_and_speeds_take_rpm() {
+    let dir = tempfile::tempdir().unwrap();
+    let ids = [
+        ("UAVCAN__NODE__ID", "10"),
+        ("UAVCAN__PUB__SP_RAT__ID", "24"),
+        ("UAVCAN__SUB__FB_DYN__ID", "110"),
+    ];
+    let defaults = shown(&drive(dir.path(), &["--show-registers"], &ids));
+    for (name, want) in [
+        ("max_speed", "0"),
+        ("soft_start_setpoint", "0.1"),
+        ("soft_start_duration", "1"),
+        ("ramp_duration", "0"),
+        ("speed_watchdog", "50"),
+    ] {
+        assert_eq!(value(&defaults, name), want, "{name}");
+    }
+    let file = dir.path().join("drive.reg");
+    std::fs::write(&file, "max_speed: 12000rpm\nspeed_watchdog: 0\n").unwrap();
+    let f = file.to_str().unwrap();
+    let from_file = shown(&drive(
+        dir.path(),
+        &["--registers", f, "--show-registers"],
+        &ids,
+    ));
+    let rad_s = |text: &str| text.parse::<f64>().unwrap();
+    assert!((rad_s(value(&from_file, "max_speed")) - 1256.637).abs() < 1e-3);
+    assert_eq!(value(&from_file, "speed_watchdog"), "0");
+    let mut env = ids.to_vec();
+    env.push(("MAX_SPEED", "10000 rpm"));
+    let from_env = shown(&drive(
+        dir.path(),
+        &["--registers", f, "--show-registers"],
+        &env,
+    ));
+    assert!((rad_s(value(&from_env, "max_speed")) - 1047.198).abs() < 1e-3);
+    let flag = shown(&drive(
+        dir.path(),
+        &[
+            "--show-registers",
+            "--max-speed",
+            "900",
+            "--soft-start-duration",
+            "0",
+        ],
+        &env,
+    ));
+    assert_eq!(value(&flag, "max_speed"), "900");
+    assert_eq!(value(&flag, "soft_start_duration"), "0");
+    let mut bad = ids.to_vec();
+    bad.push(("MAX_SPEED", "fast"));
+    let out = drive(dir.path(), &["--show-registers"], &bad);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("environment variable MAX_SPEED: `fast` is not a valid speed in rad/s, or rpm (12000rpm) (flag --max-speed, register max_speed)"),
+        "{err}"
+    );
 }

@@ -31,11 +31,11 @@ use common::{assert_seed_setpoints, compile_pycyphal_dsdl, repo, require_python}
 
 /// The slow bus [bit/s].
 const BUS_BITRATE: &str = "125000";
-/// When the bus stops, after the first frame propid sends [s] (propid's init phase lasts
-/// [`INIT`] s, so this is one second into the pattern), and for how long.
+/// When the bus stops, after the first frame propid sends [s] (propid's soft start lasts 1 s and
+/// its init phase [`INIT`] s, so this is one second into the pattern), and for how long.
 const STALL_AT: f64 = 3.0;
 const STALL_FOR: f64 = 1.0;
-const INIT: &str = "2";
+const INIT: &str = "1";
 const PATTERN: &str = "5";
 /// How long PyCyphal publishes feedback and listens [s] (it then listens one second more).
 const PEER_SECONDS: &str = "10";

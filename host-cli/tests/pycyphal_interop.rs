@@ -203,8 +203,17 @@ fn propid_and_pycyphal_understand_each_other_over_slcan() {
     let first = setpoints[0][0].as_f64().unwrap();
     assert_eq!(
         first,
+        f64::from(half_precision(0.1)),
+        "the soft start at 0.1 first"
+    );
+    let init = setpoints
+        .iter()
+        .position(|s| s[0].as_f64() != Some(first))
+        .expect("the init phase follows");
+    assert_eq!(
+        setpoints[init][0].as_f64().unwrap(),
         f64::from(half_precision(0.9)),
-        "the init phase at the high setpoint"
+        "then the init phase at the high setpoint"
     );
     assert_eq!(
         setpoints.last().unwrap()[0].as_f64().unwrap(),

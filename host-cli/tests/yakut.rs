@@ -108,9 +108,13 @@ fn yakut_lists_reads_and_writes_propid_drive_registers() {
             "--registers",
             regfile.to_str().unwrap(),
         ])
+        // No motor at the other end: no soft start (which would stop for want of feedback),
+        // only the init phase while Yakut talks to it.
         .args([
             "--init-duration",
             "120",
+            "--soft-start-duration",
+            "0",
             "--progress=false",
             "-o",
             "/dev/null",
@@ -137,9 +141,21 @@ fn yakut_lists_reads_and_writes_propid_drive_registers() {
         "uavcan.pub.readiness.id",
         "uavcan.pub.sp_rat.id",
         "uavcan.sub.fb_dyn.id",
+        "max_speed",
+        "soft_start_setpoint",
+        "soft_start_duration",
+        "ramp_duration",
+        "speed_watchdog",
     ] {
         assert!(list.contains(&format!("\"{name}\"")), "{name} in {list}");
     }
+    // A limit set over the bus, as any register: 12,000 rpm in rad/s.
+    let max = yakut(
+        &iface,
+        &["register-access", "10", "max_speed", "1256.6"],
+        60,
+    );
+    assert_eq!(max.trim(), "1256.6");
     let lohi = yakut(&iface, &["register-access", "10", "setpoint_rat_lo_hi"], 60);
     assert_eq!(lohi.trim().replace(' ', ""), "[0.2,0.8]");
     let period = yakut(&iface, &["register-access", "10", "period", "3"], 60);
@@ -156,6 +172,7 @@ fn yakut_lists_reads_and_writes_propid_drive_registers() {
     // The write went to the register file, for the next run.
     let saved = std::fs::read_to_string(&regfile).unwrap();
     assert!(saved.contains("\nperiod: 3\n"), "{saved}");
+    assert!(saved.contains("\nmax_speed: 1256.6\n"), "{saved}");
     assert!(saved.contains("\nuavcan.node.id: 10\n"), "{saved}");
 }
 
@@ -219,6 +236,7 @@ async def main():
     node.registry.setdefault("mns.local_timestamp", Bit([False]))
     node.registry.setdefault("uavcan.pub.dynamics.id", Natural16([110]))
     node.start()
+    print("ready", flush=True)
     await asyncio.sleep(float(sys.argv[1]))
     print(json.dumps({n: list(map(float, pycyphal.application.register.ValueProxy(node.registry[n]).floats))
                       for n in ("mns.pub_interval_min", "mns.local_timestamp", "uavcan.pub.dynamics.id")}))
@@ -243,7 +261,7 @@ fn propid_telega_configures_a_pycyphal_register_server() {
         .status()
         .unwrap();
     assert!(status.success());
-    let server = Command::new("python3")
+    let mut server = Command::new("python3")
         .args(["-c", PYCYPHAL_SERVER, "25"])
         .env("PYTHONPATH", &compiled)
         .env("UAVCAN__CAN__IFACE", Ptys::iface(&p.a))
@@ -253,7 +271,11 @@ fn propid_telega_configures_a_pycyphal_register_server() {
         .stdout(Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(Duration::from_secs(4));
+    // PyCyphal is up once it says so (its node started), however long its imports took.
+    let mut stdout = std::io::BufReader::new(server.stdout.take().unwrap());
+    let mut first = String::new();
+    std::io::BufRead::read_line(&mut stdout, &mut first).unwrap();
+    assert_eq!(first.trim(), "ready", "the PyCyphal server did not start");
     let telega = |extra: &[&str]| {
         let out = Command::new(env!("CARGO_BIN_EXE_propid"))
             .args(["telega", "--iface", &Ptys::iface(&p.b), "--listen", "2.5"])
@@ -276,8 +298,9 @@ fn propid_telega_configures_a_pycyphal_register_server() {
     let (code, text) = telega(&["--fix", "--feedback-id", "110"]);
     assert_eq!(code, Some(0), "{text}");
     assert!(text.contains("ready"), "{text}");
-    let out = server.wait_with_output().unwrap();
-    let held = String::from_utf8_lossy(&out.stdout);
+    let mut held = String::new();
+    std::io::Read::read_to_string(&mut stdout, &mut held).unwrap();
+    assert!(server.wait().unwrap().success());
     // What PyCyphal's registry holds after propid's writes.
     assert!(held.contains("\"mns.local_timestamp\": [1.0]"), "{held}");
     assert!(

@@ -6,6 +6,11 @@
 //! followed by another, flush reports whether everything left), the adapter refusing a command
 //! (BELL, named), status flags (error-warning, error-passive, bus-off), and the device
 //! disappearing mid-run (the master side of the pty closes, as a USB unplug).
+//!
+//! No test here bounds how long a call takes on the wall clock (a loaded machine stretches any
+//! such bound): that a refused send or a flush past its deadline returns promptly is measured by
+//! benches/benches/slcan_congestion.rs. The tests check what calls return and what reaches the
+//! wire.
 
 #![cfg(unix)] // pseudo-terminals (serialport::TTYPort) exist on Unix only
 
@@ -125,7 +130,7 @@ fn drain(port: &mut TTYPort, quiet: Duration) -> Vec<u8> {
 }
 
 #[test]
-fn congestion_refuses_at_once_and_never_splits_a_frame() {
+fn congestion_refuses_and_never_splits_a_frame() {
     // The host holds the slave end, as it would /dev/ttyACM0; the peer reads nothing for now.
     let (mut peer, host_end) = TTYPort::pair().expect("pty pair");
     let mut t = SlcanTransport::from_tty(host_end, "pty-congested").unwrap();
@@ -140,28 +145,24 @@ fn congestion_refuses_at_once_and_never_splits_a_frame() {
         .unwrap()
     };
     let mut accepted = 0u32;
-    let mut slowest = Duration::ZERO;
     let mut refusals = 0;
-    // Offer until the pty's buffer is full and a few more offers are refused.
+    // Offer until the pty's buffer is full and a few more offers are refused: a refusal returns
+    // (it does not wait for the peer; how fast: benches/benches/slcan_congestion.rs).
     while refusals < 5 {
-        let t0 = std::time::Instant::now();
         match t.send(&frame(accepted)) {
             Ok(()) => accepted += 1,
             Err(e) if e.is_would_block() => refusals += 1,
             Err(e) => panic!("{e}"),
         }
-        slowest = slowest.max(t0.elapsed());
         assert!(accepted < 1_000_000, "the pty never filled");
     }
-    // A refusal is immediate, not a wait for the peer (the old transport waited 500 ms).
-    assert!(slowest < Duration::from_millis(20), "{slowest:?}");
     let h = t.health();
     assert_eq!((h.frames_sent, h.would_block), (u64::from(accepted), 5));
     // A flush with the peer still asleep gives up at its deadline and says so, or had nothing
     // left (the last accepted line fitted whole).
-    let t0 = std::time::Instant::now();
-    let flushed = t.flush(t0 + Duration::from_millis(30)).unwrap();
-    assert!(t0.elapsed() < Duration::from_millis(200));
+    let flushed = t
+        .flush(std::time::Instant::now() + Duration::from_millis(30))
+        .unwrap();
     // The peer wakes up: everything accepted arrives, each line whole and in order.
     let reader = std::thread::spawn(move || {
         let bytes = drain(&mut peer, Duration::from_millis(300));
@@ -172,8 +173,6 @@ fn congestion_refuses_at_once_and_never_splits_a_frame() {
             .flush(std::time::Instant::now() + Duration::from_secs(2))
             .unwrap());
     }
-    // Once drained, the link takes frames again.
-    std::thread::sleep(Duration::from_millis(50));
     let (bytes, _peer) = reader.join().unwrap();
     let mut d = Decoder::new();
     let mut events = Vec::new();
@@ -195,6 +194,7 @@ fn congestion_refuses_at_once_and_never_splits_a_frame() {
         .collect();
     assert_eq!(got, (0..accepted).collect::<Vec<_>>());
     assert!(bytes.ends_with(b"\r"));
+    // Drained, the link takes frames again.
     t.send(&frame(accepted)).unwrap();
 }
 
@@ -365,8 +365,9 @@ fn the_stop_sequence_reports_whether_it_got_through() {
     let t0 = std::time::Instant::now();
     let bound = Duration::from_millis(50);
     assert!(!t.send_by(&standby, t0 + bound).unwrap());
+    // It tried until its deadline (how soon after it gives up: the congestion benchmark).
     let took = t0.elapsed();
-    assert!(took >= bound && took < bound * 4, "{took:?}");
+    assert!(took >= bound, "{took:?}");
     // The peer wakes up and drains: the same call now gets through, and the STANDBY is the
     // last line on the wire, whole.
     let reader = std::thread::spawn(move || drain(&mut peer, Duration::from_millis(300)));

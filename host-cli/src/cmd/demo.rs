@@ -10,7 +10,7 @@
 
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
 
 use anyhow::Context;
@@ -18,11 +18,11 @@ use propid_core::dsdl::Readiness;
 use propid_transport::CanTransport;
 
 use propid_drive_host::drive::run_drive;
-use propid_drive_host::realtime::SystemClock;
-use propid_drive_host::sim_drive::run_sim_drive;
+use propid_drive_host::realtime::{Clock, SystemClock};
+use propid_drive_host::sim_drive::SimDriveThread;
 use propid_drive_host::stand::{Played, StandPlant};
 use propid_drive_proto::drive::DriveConfig;
-use propid_drive_proto::sim_drive::SimDriveConfig;
+use propid_drive_proto::sim_drive::{SimDrive, SimDriveConfig};
 use propid_drive_proto::StopReason;
 
 use crate::settings::{command_args, setting, ConfigErrors, Names};
@@ -103,7 +103,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         fit: true,
         ..DriveConfig::example(played)
     };
-    let (mut transport, mut telega_end, pty) = link()?;
+    let (mut transport, telega_end, pty) = link()?;
     eprintln!(
         "demo: simulated Telega (J = {:.2e} kg·m², c2 = {:.2e}, hidden torque lag {} ms) and the driver talk SLCAN over {pty}",
         stand.inertia,
@@ -111,14 +111,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         stand.torque_lag * 1e3
     );
     let plant = StandPlant::boxed(stand, args.seed)?;
-    let stop_sim = Arc::new(AtomicBool::new(false));
-    let telega = {
-        let stop = Arc::clone(&stop_sim);
-        let cfg = SimDriveConfig::example();
-        std::thread::spawn(move || {
-            run_sim_drive(cfg, plant, telega_end.as_mut(), &SystemClock, &stop)
-        })
-    };
+    let telega = SimDriveThread::spawn(
+        SimDrive::new(SimDriveConfig::example(), plant, SystemClock.now()),
+        telega_end,
+    );
     let tsv = args.out.join("run.tsv");
     let mut file =
         std::fs::File::create(&tsv).with_context(|| format!("cannot create {}", tsv.display()))?;
@@ -145,13 +141,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             }
         },
     );
-    // Give the last STANDBY frames time to arrive before the simulated drive stops.
-    std::thread::sleep(std::time::Duration::from_millis(100));
-    stop_sim.store(true, Ordering::Relaxed);
-    let summary = telega
-        .join()
-        .map_err(|_| anyhow::anyhow!("the simulated drive panicked"))?
-        .map_err(anyhow::Error::msg)?;
+    // The simulated drive stops once the stop commands the driver sent have arrived (the bound
+    // is for a lost frame, which the check below then reports).
+    let r = &outcome.report;
+    let (_, summary) = telega.stop_after_stop_commands(
+        r.standby_sent,
+        r.zero_setpoints_sent,
+        std::time::Duration::from_secs(5),
+    );
+    let summary = summary.map_err(anyhow::Error::msg)?;
     let standby_last =
         summary.last_readiness == Some(Readiness::STANDBY) && summary.last_setpoint == Some(0.0);
     eprintln!(

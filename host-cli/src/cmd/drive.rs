@@ -15,18 +15,20 @@ use propid_drive_host::register_file::render_file;
 use propid_drive_host::stand::Played;
 use propid_drive_proto::drive::{drive_registers, Drive, DriveConfig, DriveEvent, Progress};
 use propid_drive_proto::excitation::Schedule;
+use propid_drive_proto::limits::{Limits, SoftStart};
 use propid_drive_proto::registers::{self, NODE_DESCRIPTION};
 use propid_drive_proto::settings::{
-    Deadman, InitDuration, PatternDuration, Period, Range, RangeError, RelativeError,
-    SetpointPeriod, SetpointRange,
+    parse_speed, Deadman, InitDuration, MaxSpeed, PatternDuration, Period, RampDuration, Range,
+    RangeError, RelativeError, SetpointPeriod, SetpointRange, SoftStartDuration, SoftStartSetpoint,
+    WatchdogMargin, RAD_S_PER_RPM,
 };
 use propid_drive_proto::{HostRegistry, StopReason};
 use propid_science::excitation::{Excitation, Pattern};
 
 use crate::bus::{Bus, BusArgs};
 use crate::settings::{
-    checked, command_args, environment, fill, setpoint_range, setting, ConfigError, ConfigErrors,
-    Names, Problem, RegisterFile,
+    checked, command_args, environment, fill, numbers, setpoint_range, setting, ConfigError,
+    ConfigErrors, Names, Problem, RegisterFile,
 };
 use crate::InputError;
 
@@ -99,6 +101,61 @@ setting! {
             let p = crate::settings::seconds_in(text, percent)?;
             RelativeError::new(p / 100.0).map_err(|_| Problem::Range(RangeError { range: percent, got: p }))
         };
+    /// The highest speed allowed.
+    MaxSpeedSetting: Option<MaxSpeed> =
+        Names::register("max-speed", registers::MAX_SPEED, "MAX_SPEED"),
+        "The highest speed the rotor may reach: rad/s, or rpm (12000rpm); 0: none [default: none: give your propeller's rated speed]",
+        |text: &str| speed_or_none(text, MaxSpeed::new);
+    /// The soft start's setpoint.
+    SoftStartSetpointSetting: SoftStartSetpoint =
+        Names::register("soft-start-setpoint", registers::SOFT_START_SETPOINT, "SOFT_START_SETPOINT"),
+        "The soft start's setpoint: a ratiometric magnitude in (0, 1], applied in the direction of hi, at most |hi| [default: 0.1]",
+        within SoftStartSetpoint;
+    /// The soft start's duration.
+    SoftStartDurationSetting: Option<SoftStartDuration> =
+        Names::register("soft-start-duration", registers::SOFT_START_DURATION, "SOFT_START_DURATION"),
+        "How long the soft start lasts before the init phase [s]; feedback must arrive and the rotor speed up the commanded way; 0: no soft start [default: 1]",
+        |text: &str| seconds_or_none(text, SoftStartDuration::new);
+    /// The ramp's duration.
+    RampDurationSetting: Option<RampDuration> =
+        Names::register("ramp-duration", registers::RAMP_DURATION, "RAMP_DURATION"),
+        "A ramp from the soft start's setpoint to hi over this long [s], before the init phase; 0: none [default: 0]",
+        |text: &str| seconds_or_none(text, RampDuration::new);
+    /// The speed watchdog's margin.
+    SpeedWatchdogSetting: Option<WatchdogMargin> =
+        Names::register("speed-watchdog", registers::SPEED_WATCHDOG, "SPEED_WATCHDOG"),
+        "The speed watchdog: how far the speed may run past what the reported torque can drive it, rad/s or rpm; 0: off [default: 50]",
+        |text: &str| speed_or_none(text, WatchdogMargin::new);
+}
+
+/// What a speed's text must be.
+const SPEED: &str = "speed in rad/s, or rpm (12000rpm)";
+
+/// A speed (rad/s, or rpm), 0 for none, made into `make`'s type.
+fn speed_or_none<T>(
+    text: &str,
+    make: fn(f64) -> Result<T, RangeError>,
+) -> Result<Option<T>, Problem> {
+    let v = parse_speed(text).ok_or_else(|| Problem::Type {
+        text: text.to_string(),
+        ty: SPEED,
+    })?;
+    if v == 0.0 {
+        return Ok(None);
+    }
+    make(v).map(Some).map_err(Problem::Range)
+}
+
+/// Seconds, 0 for none, made into `make`'s type.
+fn seconds_or_none<T>(
+    text: &str,
+    make: fn(f64) -> Result<T, RangeError>,
+) -> Result<Option<T>, Problem> {
+    let [v] = numbers::<1>(text)?;
+    if v == 0.0 {
+        return Ok(None);
+    }
+    make(v).map(Some).map_err(Problem::Range)
 }
 
 command_args! {
@@ -120,6 +177,11 @@ command_args! {
             deadman: DeadmanSetting as "S",
             drive_node_id: DriveNodeId as "ID",
             until_stderr: UntilStderr as "PCT",
+            max_speed: MaxSpeedSetting as "SPEED",
+            soft_start_setpoint: SoftStartSetpointSetting as "SETPOINT",
+            soft_start_duration: SoftStartDurationSetting as "S",
+            ramp_duration: RampDurationSetting as "S",
+            speed_watchdog: SpeedWatchdogSetting as "SPEED",
         }
         registers {
             description: Description,
@@ -243,6 +305,8 @@ pub struct Settings {
     pub live: Option<String>,
     /// Even on a non-loopback address.
     pub live_allow_remote: bool,
+    /// The limits that stop a runaway rotor.
+    pub limits: Limits,
 }
 
 impl TryFrom<Raw> for Settings {
@@ -275,6 +339,11 @@ impl TryFrom<Raw> for Settings {
             progress,
             pattern_file,
             until_stderr,
+            max_speed,
+            soft_start_setpoint,
+            soft_start_duration,
+            ramp_duration,
+            speed_watchdog,
             live,
             live_allow_remote,
         } = args;
@@ -300,6 +369,12 @@ impl TryFrom<Raw> for Settings {
         let deadman = e.or(deadman, Deadman::DEFAULT);
         let drive_node_id = e.given(drive_node_id);
         let until = e.given(until_stderr);
+        let defaults = Limits::DEFAULT;
+        let max_speed = e.or(max_speed, defaults.max_speed);
+        let soft_start_setpoint = e.or(soft_start_setpoint, SoftStart::DEFAULT.setpoint);
+        let soft_start_duration = e.or(soft_start_duration, Some(SoftStart::DEFAULT.duration));
+        let ramp = e.or(ramp_duration, defaults.ramp);
+        let watchdog = e.or(speed_watchdog, defaults.watchdog);
         let from_file = pattern_file.map(|path| {
             crate::cmd::sim::read_pattern_file(&path)
                 .map_err(|e| e.to_string())
@@ -320,6 +395,7 @@ impl TryFrom<Raw> for Settings {
             errors;
             node_id, description, bus, readiness_id, setpoint_id, feedback_id, range, period,
             duration, init_duration, setpoint_period, deadman, drive_node_id, until, from_file,
+            max_speed, soft_start_setpoint, soft_start_duration, ramp, watchdog,
         );
         let played = from_file.unwrap_or_else(|| {
             let schedule = Schedule {
@@ -350,6 +426,15 @@ impl TryFrom<Raw> for Settings {
             until,
             live,
             live_allow_remote,
+            limits: Limits {
+                max_speed,
+                soft_start: soft_start_duration.map(|duration| SoftStart {
+                    setpoint: soft_start_setpoint,
+                    duration,
+                }),
+                ramp,
+                watchdog,
+            },
         })
     }
 }
@@ -369,6 +454,7 @@ impl Settings {
             deadman: self.deadman,
             fit: self.fit,
             until_rel_stderr: self.until,
+            limits: self.limits,
         }
     }
 
@@ -384,6 +470,10 @@ impl Settings {
 /// Prints a drive's events on stderr (`progress` off: only the stop).
 pub fn print_event(event: &DriveEvent, excitation: &Excitation, progress: bool) {
     match event {
+        DriveEvent::SoftStartPassed(p) if progress => eprintln!(
+            "drive: soft start passed: {} feedback messages, the rotor went from {:.1} to {:.1} rad/s the commanded way",
+            p.messages, p.from, p.to
+        ),
         DriveEvent::PatternStarted if progress => eprintln!(
             "drive: pattern commenced ({}, {} s)",
             excitation.pattern, excitation.duration
@@ -520,6 +610,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         s.played,
         "propid drive",
     )?;
+    eprintln!("drive: {}", limits_line(&cfg));
     let drive = Drive::with_registers(cfg, &served.clone(), SystemClock.now());
     let outcome = run_drive_machine(
         drive,
@@ -563,6 +654,8 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "drive: stopped ({}); {delivered}; {} rows written; frames dropped {} (link busy {} times, {} setpoints superseded, {} refused by a full queue)",
         r.reason, r.rows, r.tx.dropped, r.tx.would_block, r.tx.superseded, r.tx.refused
     );
+    eprintln!("drive: {}", feedback_line(r));
+    eprintln!("drive: {}", priority_line(&outcome.link.priority));
     if let Some(e) = r.estimate.filter(|_| s.fit) {
         eprintln!(
             "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
@@ -577,6 +670,65 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         StopReason::Completed => anyhow::bail!("the stop commands were not confirmed sent"),
         StopReason::Signal => Err(crate::Interrupted.into()),
+        StopReason::Limit(limit) => Err(crate::LimitStopped(limit.to_string()).into()),
         reason => anyhow::bail!("{reason}"),
+    }
+}
+
+/// The limits in force, said before the run.
+pub fn limits_line(cfg: &DriveConfig) -> String {
+    let l = &cfg.limits;
+    let hi = cfg.excitation.schedule().range.hi();
+    let mut parts = Vec::new();
+    match l.soft_start {
+        Some(s) => parts.push(format!(
+            "soft start at {:+} for {} s (feedback and the direction checked before any high torque)",
+            s.setpoint.get().min(hi.abs()).copysign(if hi < 0.0 { -1.0 } else { 1.0 }),
+            s.duration
+        )),
+        None => parts.push("no soft start".into()),
+    }
+    if let Some(r) = l.ramp {
+        parts.push(format!("a {r} s ramp to {hi}"));
+    }
+    match l.watchdog {
+        Some(w) => parts.push(format!("speed watchdog, margin {w} rad/s")),
+        None => parts.push("no speed watchdog".into()),
+    }
+    match l.max_speed {
+        Some(m) => parts.push(format!(
+            "maximum speed {m} rad/s ({:.0} rpm)",
+            m.get() / RAD_S_PER_RPM
+        )),
+        None => parts.push(
+            "no maximum speed (--max-speed: your propeller's rated speed, e.g. 12000rpm)".into(),
+        ),
+    }
+    format!("limits: {}", parts.join("; "))
+}
+
+/// How much feedback was lost on its way during the recording, and where it was seen missing.
+pub fn feedback_line(r: &propid_drive_proto::drive::StopReport) -> String {
+    let l = r.feedback_lost;
+    let expected = r.rows + l.lost();
+    let share = if expected == 0 {
+        100.0
+    } else {
+        100.0 * r.rows as f64 / expected as f64
+    };
+    format!(
+        "feedback: {} rows recorded, {} lost on the way ({share:.2} % kept): {} missing by the drive's timestamps (lost anywhere), {} by transfer-ID gaps (lost after the drive's queue: bus, adapter, kernel, reader); {} frames of damaged transfers",
+        r.rows, l.lost(), l.by_timestamp, l.by_transfer_id, r.damaged_frames
+    )
+}
+
+/// The loop's scheduling priority, and how to get a real-time one where it was refused.
+pub fn priority_line(p: &propid_transport::priority::ThreadPriority) -> String {
+    if p.is_realtime() {
+        format!("the control loop and the serial reader ran at {p}")
+    } else {
+        format!(
+            "the control loop ran at {p}; on a busy machine it can wait for a CPU long enough to lose feedback (docs/TRANSPORTS.md); on Linux `sudo setcap cap_sys_nice+ep \"$(command -v propid)\"` lets it take a real-time priority"
+        )
     }
 }

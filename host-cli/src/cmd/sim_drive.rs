@@ -11,11 +11,12 @@ use propid_core::dsdl::Readiness;
 use propid_drive_host::realtime::{Clock, SystemClock};
 use propid_drive_host::sim_drive::run_sim_drive_machine;
 use propid_drive_host::stand::StandPlant;
+use propid_drive_proto::plant::TorqueScaled;
 use propid_drive_proto::registers::{
     self, LOCAL_TIMESTAMP, PUB_INTERVAL_MIN, TELEGA_FEEDBACK_ID, TELEGA_READINESS_ID,
     TELEGA_SETPOINT_ID,
 };
-use propid_drive_proto::settings::{FeedbackInterval, RunLimit};
+use propid_drive_proto::settings::{FeedbackInterval, RunLimit, TorqueScale};
 use propid_drive_proto::sim_drive::{sim_drive_registers, SimDrive, SimDriveConfig, SimDriveEvent};
 
 use crate::bus::{Bus, BusArgs};
@@ -58,6 +59,10 @@ setting! {
             [0.0] => Ok(None),
             [x] => RunLimit::new(x).map(Some).map_err(Problem::Range),
         };
+    /// The simulated motor's torque per commanded torque.
+    TorqueScaleSetting: TorqueScale = Names::flag("torque-scale"),
+        "The torque the simulated motor makes per torque it is commanded and reports: -1 reverses its sign (a motor wired the other way), 0 makes none; for trying propid drive's limits [default: 1]",
+        within TorqueScale;
 }
 
 command_args! {
@@ -71,6 +76,7 @@ command_args! {
             interval: Interval as "S",
             local_timestamp: LocalTimestamp as "BOOL",
             duration: Duration as "S",
+            torque_scale: TorqueScaleSetting as "K",
         }
         registers {}
         nested {
@@ -92,6 +98,8 @@ pub struct Settings {
     pub local_timestamp: bool,
     /// The stand it simulates.
     pub stand: StandArgs,
+    /// Its motor's torque per commanded torque.
+    pub torque_scale: TorqueScale,
 }
 
 impl TryFrom<Args> for Settings {
@@ -110,6 +118,7 @@ impl TryFrom<Args> for Settings {
             interval,
             local_timestamp,
             duration,
+            torque_scale,
             stand,
         } = args;
         let e = &mut errors;
@@ -122,10 +131,11 @@ impl TryFrom<Args> for Settings {
         let interval = e.or(interval, example.interval);
         let local_timestamp = e.or(local_timestamp, true);
         let duration = e.or(duration, None);
+        let torque_scale = e.or(torque_scale, TorqueScale::from_const(1.0));
         checked!(
             errors;
             node_id, bus, readiness_id, setpoint_id, feedback_id, interval, local_timestamp,
-            duration,
+            duration, torque_scale,
         );
         let sim = SimDriveConfig {
             node_id,
@@ -141,6 +151,7 @@ impl TryFrom<Args> for Settings {
             sim,
             local_timestamp,
             stand,
+            torque_scale,
         })
     }
 }
@@ -161,8 +172,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         sim: cfg,
         local_timestamp,
         stand,
+        torque_scale,
     } = Settings::try_from(args)?;
-    let plant = StandPlant::boxed(stand.config()?, stand.seed)?;
+    let mut plant = StandPlant::boxed(stand.config()?, stand.seed)?;
+    if torque_scale.get() != 1.0 {
+        plant = Box::new(TorqueScaled::new(plant, torque_scale.get()));
+        eprintln!(
+            "sim-drive: the motor makes {} times the torque it is commanded and reports",
+            torque_scale
+        );
+    }
     let mut transport = bus.open()?;
     let stop = Arc::new(AtomicBool::new(false));
     let _handlers = crate::signals::install(&stop)?;
@@ -194,9 +213,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         )
         .map_err(anyhow::Error::msg)?;
     eprintln!(
-        "sim-drive: {} setpoints received, {} feedback published; last readiness {}, last setpoint {}",
+        "sim-drive: {} setpoints received, {} feedback published, {} feedback samples dropped unsent (not sent within {} s); last readiness {}, last setpoint {}",
         summary.setpoints,
         summary.feedback_published,
+        summary.feedback_dropped,
+        propid_drive_proto::sim_drive::FEEDBACK_HOLD.as_secs_f64(),
         summary.last_readiness.map_or("none", readiness_name),
         summary
             .last_setpoint

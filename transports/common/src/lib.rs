@@ -28,6 +28,8 @@
 //! sequence (STANDBY and a zero setpoint) that must go out within a bound.
 #![deny(missing_docs)]
 
+pub mod priority;
+
 use std::fmt;
 use std::sync::mpsc;
 use std::sync::OnceLock;

@@ -24,4 +24,4 @@ pub use codec::{
     bitrate_command, encode_frame, open_command, raw_bitrate_command, AdapterClock, Decoder, Event,
     StatusFlags, TimestampUnwrapper,
 };
-pub use serial::SlcanTransport;
+pub use serial::{ReaderStats, SlcanTransport};

@@ -1,5 +1,13 @@
 //! SLCAN over a serial port.
 //!
+//! A reader thread drains the port as soon as bytes arrive and stamps each read on the host
+//! clock, into a bounded queue the caller's loop empties when it gets to it: a loop busy with a
+//! row, or descheduled on a loaded machine, leaves the bytes waiting in the process, not in the
+//! kernel's few kilobytes of terminal buffer (a pseudo-terminal holds about 16 KiB; behind a USB
+//! adapter, a full buffer stops the reads and the adapter drops frames). A received frame's
+//! timestamp is the time of the read that brought it (or the adapter's, mapped onto the host
+//! clock), not the time the loop looked.
+//!
 //! Writes never wait for the adapter: the port is non-blocking (Unix: `O_NONBLOCK` on the file
 //! descriptor) or has a 1 ms write timeout (Windows), a line the port takes only in part keeps
 //! its tail in `tail`, and that tail goes out before any other byte. Replies (`\r`, `z`, BELL)
@@ -7,7 +15,11 @@
 //! awaiting one; that is how a BELL names the command it refuses.
 
 use std::collections::VecDeque;
-use std::io::{ErrorKind, Read, Write};
+use std::io::{ErrorKind, Write};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError};
+use std::sync::Arc;
+use std::thread::JoinHandle;
 use std::time::Duration;
 
 use propid_core::can::Frame;
@@ -34,10 +46,150 @@ const REPLY_WAIT: Duration = Duration::from_millis(100);
 const AWAITING_MAX: usize = 256;
 /// How often the adapter's status flags are asked for (`F`).
 const STATUS_INTERVAL: Duration = Duration::from_secs(1);
+/// Reads the reader thread has made and the caller's loop has not taken yet, at most (about
+/// 30 s of a 500 Hz drive's feedback, one message per read); when full, the reader waits and the
+/// kernel buffers again.
+const READ_QUEUE: usize = 16_384;
+/// The largest single read.
+const READ_CHUNK: usize = 4096;
+/// How long one wait of the reader thread lasts (how soon it sees that the transport is gone).
+const READ_SLICE: Duration = Duration::from_millis(20);
+
+/// One read of the reader thread.
+enum ReadResult {
+    /// Bytes, and the host time they were read at.
+    Bytes(Instant, Vec<u8>),
+    /// The port failed: end of file (`None`) or an error; the thread has ended.
+    Failed(Option<std::io::Error>),
+}
+
+/// What the reader thread counts.
+#[derive(Default)]
+struct ReaderCounters {
+    reads: AtomicU64,
+    bytes: AtomicU64,
+    /// Reads that filled the whole buffer (more was waiting in the kernel).
+    full_reads: AtomicU64,
+    /// Times the queue was full and the reader had to wait for the caller.
+    queue_full: AtomicU64,
+    /// The reader runs at a real-time priority.
+    realtime: AtomicBool,
+}
+
+/// The reader thread and the queue it fills.
+struct Reader {
+    queue: Option<Receiver<ReadResult>>,
+    stop: Arc<AtomicBool>,
+    counters: Arc<ReaderCounters>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Reader {
+    fn start(mut port: Box<dyn serialport::SerialPort>, name: &str) -> std::io::Result<Reader> {
+        // Unix: the clone's timeout is its own (a poll before each read). Windows' timeouts
+        // belong to the handle, which the writer sets; the reader takes whatever it has.
+        if cfg!(unix) {
+            port.set_timeout(READ_SLICE)?;
+        }
+        let (tx, rx) = std::sync::mpsc::sync_channel(READ_QUEUE);
+        let stop = Arc::new(AtomicBool::new(false));
+        let counters = Arc::new(ReaderCounters::default());
+        let thread = {
+            let (stop, counters) = (Arc::clone(&stop), Arc::clone(&counters));
+            std::thread::Builder::new()
+                .name(format!("slcan reader {name}"))
+                .spawn(move || read_loop(port.as_mut(), &tx, &stop, &counters))?
+        };
+        Ok(Reader {
+            queue: Some(rx),
+            stop,
+            counters,
+            thread: Some(thread),
+        })
+    }
+}
+
+impl Drop for Reader {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        // A reader waiting on a full queue wakes up with an error once the queue is gone.
+        self.queue.take();
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// The reader thread: reads until the port fails or the transport is dropped.
+fn read_loop(
+    port: &mut dyn serialport::SerialPort,
+    tx: &SyncSender<ReadResult>,
+    stop: &AtomicBool,
+    counters: &ReaderCounters,
+) {
+    // Bytes that wait in the kernel are lost once its buffer is full: this thread takes the CPU
+    // as soon as they arrive, where permitted.
+    let priority = propid_transport::priority::raise_thread_priority();
+    counters
+        .realtime
+        .store(priority.obtained().is_realtime(), Ordering::Relaxed);
+    let mut buf = vec![0u8; READ_CHUNK];
+    while !stop.load(Ordering::Relaxed) {
+        let read = match port.read(&mut buf) {
+            Ok(0) => ReadResult::Failed(None),
+            Ok(n) => {
+                let now = HostClock::now();
+                counters.reads.fetch_add(1, Ordering::Relaxed);
+                counters.bytes.fetch_add(n as u64, Ordering::Relaxed);
+                if n == buf.len() {
+                    counters.full_reads.fetch_add(1, Ordering::Relaxed);
+                }
+                ReadResult::Bytes(now, buf[..n].to_vec())
+            }
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
+                ) =>
+            {
+                continue
+            }
+            Err(e) => ReadResult::Failed(Some(e)),
+        };
+        let failed = matches!(read, ReadResult::Failed(_));
+        let sent = match tx.try_send(read) {
+            Err(TrySendError::Full(read)) => {
+                counters.queue_full.fetch_add(1, Ordering::Relaxed);
+                tx.send(read).is_ok()
+            }
+            other => other.is_ok(),
+        };
+        if failed || !sent {
+            return;
+        }
+    }
+}
+
+/// What the reader thread of an [`SlcanTransport`] has done.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ReaderStats {
+    /// Reads that returned bytes.
+    pub reads: u64,
+    /// Bytes read.
+    pub bytes: u64,
+    /// Reads that filled the whole buffer: more was waiting in the kernel.
+    pub full_reads: u64,
+    /// Times the queue to the caller was full and the reader waited (the kernel buffered).
+    pub queue_full: u64,
+    /// The reader thread runs at a real-time priority.
+    pub realtime: bool,
+}
 
 /// An SLCAN adapter on a serial port (or one end of a pseudo-terminal pair).
 pub struct SlcanTransport {
+    /// The port, for writing (the reader thread reads a clone of it).
     port: Box<dyn serialport::SerialPort>,
+    reader: Reader,
     name: String,
     decoder: Decoder,
     pending: VecDeque<Frame>,
@@ -100,7 +252,7 @@ impl SlcanTransport {
         #[cfg(unix)]
         let mut t = Self::from_tty(port, path)?;
         #[cfg(not(unix))]
-        let mut t = Self::from_port(Box::new(port), path);
+        let mut t = Self::from_port(Box::new(port), path)?;
         t.configure(bitrate)?;
         Ok(t)
     }
@@ -121,15 +273,29 @@ impl SlcanTransport {
                 error: std::io::Error::from(e),
             });
         }
-        Ok(Self::from_port(Box::new(port), name))
+        Self::from_port(Box::new(port), name)
     }
 
-    /// Wraps an already open port without configuring it. On Unix prefer [`Self::from_tty`]:
-    /// a port left blocking can stall a write until a whole line fits.
-    pub fn from_port(port: Box<dyn serialport::SerialPort>, name: &str) -> Self {
-        SlcanTransport {
+    /// Wraps an already open port without configuring it, and starts its reader thread (on a
+    /// clone of the port). On Unix prefer [`Self::from_tty`]: a port left blocking can stall a
+    /// write until a whole line fits.
+    pub fn from_port(
+        port: Box<dyn serialport::SerialPort>,
+        name: &str,
+    ) -> Result<Self, TransportError> {
+        let name = format!("slcan:{name}");
+        let io = |error| TransportError::Io {
+            device: name.clone(),
+            error,
+        };
+        let clone = port
+            .try_clone()
+            .map_err(|e| io(std::io::Error::other(e.to_string())))?;
+        let reader = Reader::start(clone, &name).map_err(io)?;
+        Ok(SlcanTransport {
             port,
-            name: format!("slcan:{name}"),
+            reader,
+            name,
             decoder: Decoder::new(),
             pending: VecDeque::new(),
             events: Vec::new(),
@@ -141,7 +307,7 @@ impl SlcanTransport {
             status_interval: Some(STATUS_INTERVAL),
             next_status: std::time::Instant::now() + STATUS_INTERVAL,
             gone: false,
-        }
+        })
     }
 
     /// How often to ask the adapter for its status flags (`F`); `None` never asks (a status
@@ -308,27 +474,42 @@ impl SlcanTransport {
         Ok(())
     }
 
-    /// Reads what arrives within `wait`; frames go to `pending`, replies to the counters.
+    /// Takes what the reader thread read, waiting up to `wait` for the first read; frames go to
+    /// `pending`, replies to the counters.
     fn read_once(&mut self, wait: Duration) -> Result<(), TransportError> {
-        let mut buf = [0u8; 1024];
-        let _ = self.port.set_timeout(wait);
-        match self.port.read(&mut buf) {
-            Ok(0) => Err(self.disappeared()),
-            Ok(n) => {
-                let now = HostClock::now();
-                self.decoder.push(&buf[..n], &mut self.events);
-                self.absorb(now);
-                Ok(())
+        let Some(queue) = self.reader.queue.as_ref() else {
+            return Err(self.disappeared());
+        };
+        let mut next = match queue.recv_timeout(wait) {
+            Ok(read) => Some(read),
+            Err(RecvTimeoutError::Timeout) => return Ok(()),
+            Err(RecvTimeoutError::Disconnected) => Some(ReadResult::Failed(None)),
+        };
+        // Everything already read, without waiting again.
+        while let Some(read) = next.take() {
+            match read {
+                ReadResult::Bytes(at, bytes) => {
+                    self.decoder.push(&bytes, &mut self.events);
+                    self.absorb(at);
+                }
+                ReadResult::Failed(None) => return Err(self.disappeared()),
+                ReadResult::Failed(Some(e)) => return Err(self.io_error(e)),
             }
-            Err(e)
-                if matches!(
-                    e.kind(),
-                    ErrorKind::TimedOut | ErrorKind::WouldBlock | ErrorKind::Interrupted
-                ) =>
-            {
-                Ok(())
-            }
-            Err(e) => Err(self.io_error(e)),
+            next = self.reader.queue.as_ref().and_then(|q| q.try_recv().ok());
+        }
+        Ok(())
+    }
+
+    /// What the reader thread has done so far: reads, bytes, reads that filled its buffer
+    /// (more was waiting in the kernel), and times its queue was full.
+    pub fn reader_counters(&self) -> ReaderStats {
+        let c = &self.reader.counters;
+        ReaderStats {
+            reads: c.reads.load(Ordering::Relaxed),
+            bytes: c.bytes.load(Ordering::Relaxed),
+            full_reads: c.full_reads.load(Ordering::Relaxed),
+            queue_full: c.queue_full.load(Ordering::Relaxed),
+            realtime: c.realtime.load(Ordering::Relaxed),
         }
     }
 
