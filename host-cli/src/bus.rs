@@ -103,7 +103,7 @@ fn open_socketcan(name: &str, mtu: Mtu) -> anyhow::Result<Box<dyn CanTransport>>
 
 #[cfg(not(target_os = "linux"))]
 fn open_socketcan(name: &str, _mtu: Mtu) -> anyhow::Result<Box<dyn CanTransport>> {
-    Err(crate::InputError(format!(
+    Err(crate::InputError::invalid(format!(
         "socketcan:{name}: socketcan is only available on Linux; use an SLCAN adapter (slcan:DEVICE[@BAUD])"
     ))
     .into())
