@@ -170,3 +170,35 @@ fn python_reads_the_result_as_numbers() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// README.md's example of the Result is what `propid diagnose lag.tsv --diameter 7in` prints on
+/// the command's own simulated run (the stand is deterministic): every line of the example's
+/// block, a line ending in `…` as a prefix.
+#[test]
+fn the_readmes_result_example_is_what_diagnose_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = lagged(dir.path());
+    let out = propid_ok(&["diagnose", tsv.to_str().unwrap(), "--diameter", "7in"]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../README.md"))
+            .unwrap();
+    let from = readme
+        .find("**One answer: the Result.**")
+        .expect("README has the Result paragraph");
+    let block = &readme[from..];
+    let start = block.find("```text\n").expect("its example") + "```text\n".len();
+    let example = &block[start..start + block[start..].find("```").unwrap()];
+    let lines: Vec<&str> = example.lines().filter(|l| !l.trim().is_empty()).collect();
+    assert!(lines.len() >= 5, "{example}");
+    for line in lines {
+        let found = match line.strip_suffix(" …") {
+            Some(prefix) => text.lines().any(|l| l.starts_with(prefix)),
+            None => text.lines().any(|l| l == line),
+        };
+        assert!(
+            found,
+            "README's line not printed: {line:?}\n--- diagnose printed:\n{text}"
+        );
+    }
+}

@@ -294,7 +294,7 @@ fn read_tsv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
     let columns = py.detach(|| -> Result<_, anyhow::Error> {
         let name = path.display().to_string();
         let file = std::fs::File::open(&path)
-            .map_err(|e| propid::InputError::invalid(format!("{name}: cannot open: {e}")))?;
+            .map_err(|e| propid::InputError::os(name.clone(), "cannot open", &e))?;
         let mut reader = TsvReader::new(std::io::BufReader::with_capacity(1 << 20, file), name)?;
         // The reader keeps the header's positions, not its names: the first line, once more.
         let mut header = String::new();
@@ -334,6 +334,10 @@ fn imported<'py>(
     // The stand columns the importer kept (thrust, voltage, current, command).
     for column in &imported.stand_columns {
         columns.push((column.name().into(), imported.stand(*column)));
+    }
+    // The other measured columns the command writes after them (electrical power, …).
+    for extra in &imported.extra {
+        columns.push((extra.name.into(), extra.values.clone()));
     }
     Ok((columns_dict(py, columns)?, imported.assumptions))
 }

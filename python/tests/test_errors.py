@@ -67,10 +67,11 @@ def test_too_few_samples(tmp_path):
     rows = "".join(f"{i * 0.01}\t1\t{i}\t2\n" for i in range(5))
     path = write(tmp_path / "short.tsv", "t\tforce\tvelocity\tacceleration\n" + rows)
     status, message = cli_error(["fit", str(path)])
-    assert status == 2 and "usable samples" in message
+    # Too few samples is the data's limit, not a wrong input: exit 3, as diagnose says it.
+    assert status == 3 and "usable samples" in message
     frame = propid.read_tsv(path)
     for data in (path, frame):
-        with pytest.raises(propid.InputError) as e:
+        with pytest.raises(propid.CannotJudge) as e:
             propid.fit(data)
         assert str(e.value) == message
 

@@ -784,6 +784,17 @@ fn report_of(
         if est.c2 == 0.0 { 0.0 } else { args.c2_max },
     ];
     let mut not_identified = Vec::new();
+    // Errors in the regressor: a bias no standard error shows (plausibility::torque_noise_bias).
+    let torque_bias = plausibility::torque_noise_bias(
+        &gate.iter().map(|s| s.force).collect::<Vec<f64>>(),
+        &gate.iter().map(|s| s.velocity).collect::<Vec<f64>>(),
+    );
+    if torque_bias > 0.02 && torque_bias <= plausibility::MAX_RELATIVE_STDERR {
+        warnings.push(format!(
+            "the torque's noise is large beside its swing: least squares reads mass about {:.0} % high (errors in the regressor); a wider lo..hi would shrink it",
+            100.0 * torque_bias
+        ));
+    }
     for (k, name) in ["mass", "c1", "c2"].into_iter().enumerate() {
         if k == 1 && args.c1_max == 0.0 {
             continue;
@@ -797,7 +808,9 @@ fn report_of(
             }
         }
         let bound = est.at_bound[k].then_some(bounds[k]);
-        if let Some(why) = plausibility::identified(values[k], stderr[k], bound) {
+        let noisy = (k == 0 && torque_bias > plausibility::MAX_RELATIVE_STDERR)
+            .then_some(plausibility::NotIdentified::NoisyTorque { bias: torque_bias });
+        if let Some(why) = plausibility::identified(values[k], stderr[k], bound).or(noisy) {
             if k != 0 || !est.at_bound[0] {
                 warnings.push(why.describe(name, values[k]));
             }

@@ -309,6 +309,63 @@ pub enum NotIdentified {
         /// Standard error over |value|.
         relative_stderr: f64,
     },
+    /// The torque's own noise is so large a share of its variation that least squares reads J
+    /// high by more than [`MAX_RELATIVE_STDERR`] (errors in the regressor: the fitted 1/J shrinks
+    /// by var(signal)/var(torque)), which no standard error shows.
+    NoisyTorque {
+        /// The predicted relative bias of J.
+        bias: f64,
+    },
+}
+
+/// The relative bias of J that the torque column's white noise predicts for a least-squares fit
+/// of the seed's model: with σ² the noise variance (robustly from the sample-to-sample
+/// differences: 1.4826·MAD/√2, so steps and a held load cell's repeats do not count as noise) and
+/// V the variance of the torque left after its regression on the drag regressor ω|ω| (only that
+/// part identifies 1/J), the fitted 1/J is attenuated by (V − σ²)/V, so J reads σ²/(V − σ²) high.
+/// 0 when it cannot be estimated.
+pub fn torque_noise_bias(force: &[f64], speed: &[f64]) -> f64 {
+    let (f, drag): (Vec<f64>, Vec<f64>) = force
+        .iter()
+        .zip(speed)
+        .filter(|(f, w)| f.is_finite() && w.is_finite())
+        .map(|(&f, &w)| (f, w * w.abs()))
+        .unzip();
+    if f.len() < 100 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = f.windows(2).map(|w| w[1] - w[0]).collect();
+    let median = |x: &mut Vec<f64>| {
+        x.sort_by(f64::total_cmp);
+        x[x.len() / 2]
+    };
+    let m = median(&mut d);
+    let mut dev: Vec<f64> = d.iter().map(|x| (x - m).abs()).collect();
+    let sigma = 1.4826 * median(&mut dev) / std::f64::consts::SQRT_2;
+    // The torque's variance left after the drag regressor (with a mean) takes its share.
+    let n = f.len() as f64;
+    let (mf, md) = (f.iter().sum::<f64>() / n, drag.iter().sum::<f64>() / n);
+    let sdd: f64 = drag.iter().map(|d| (d - md) * (d - md)).sum();
+    let sfd: f64 = f.iter().zip(&drag).map(|(x, d)| (x - mf) * (d - md)).sum();
+    let beta = if sdd > 0.0 { sfd / sdd } else { 0.0 };
+    let var = f
+        .iter()
+        .zip(&drag)
+        .map(|(x, d)| {
+            let r = (x - mf) - beta * (d - md);
+            r * r
+        })
+        .sum::<f64>()
+        / n;
+    let noise = sigma * sigma;
+    if !(var > 0.0 && noise.is_finite()) {
+        return 0.0;
+    }
+    if noise >= var {
+        f64::INFINITY
+    } else {
+        noise / (var - noise)
+    }
 }
 
 /// Whether a fitted value with its standard error is identified (`at_bound` when the fit put it
@@ -338,6 +395,12 @@ impl NotIdentified {
             ),
             NotIdentified::Imprecise { .. } => format!(
                 "{name} is not identified: the data give its value {value:e} no finite standard error"
+            ),
+            NotIdentified::NoisyTorque { bias } => format!(
+                "{name} is not identified: the torque's noise is so large beside its swing that least squares reads \
+                 {name} about {:.0} % high ({value:e}; errors in the regressor, which no standard error shows); \
+                 a run with a larger torque swing (a wider lo..hi) would identify it",
+                100.0 * bias.min(99.99)
             ),
         }
     }

@@ -9,8 +9,8 @@ use super::candidate::{separating_run, BaseTerm, EffectKind};
 use super::engine::{fit, fit_on_all, held_out_residuals, residuals, Fit};
 use super::model::{Effect, Model};
 use super::report::{
-    Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Report, ResidualAnalysis,
-    SimulationRms, Traces, Unexplained, Unidentified, Verdict,
+    Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
+    ResidualAnalysis, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
 };
 use super::search::{estimate_of, search, Found, Scored};
 use super::select::{self, Decision, Evidence};
@@ -218,7 +218,27 @@ pub(crate) fn run(
         .then(|| periodic(&found.model, s, &plan, f_peak, ratio, &correlations))
         .flatten();
     let concentration = held_out_residuals(&model, s).and_then(|r| concentration(s, &r));
-    let unidentified = Unidentified::of(&extended);
+    let mut unidentified = Unidentified::of(&extended);
+    // Errors in the regressor: the torque's noise biases J beyond what its standard error says.
+    let bias = crate::plausibility::torque_noise_bias(&s.force, &s.velocity);
+    if bias > 0.02 && bias <= crate::plausibility::MAX_RELATIVE_STDERR {
+        notes.push(format!(
+            "the torque's noise is large beside its swing: least squares reads J about {:.0} % high (errors in the regressor, which no standard error shows); a wider lo..hi would shrink it",
+            100.0 * bias
+        ));
+    }
+    if bias > crate::plausibility::MAX_RELATIVE_STDERR
+        && !unidentified
+            .iter()
+            .any(|u| u.parameter == Parameter::Inertia)
+    {
+        unidentified.push(Unidentified {
+            parameter: Parameter::Inertia,
+            value: extended.inertia,
+            stderr: extended.inertia_stderr,
+            torque_noise_bias: Some(bias),
+        });
+    }
 
     let step = trace_step;
     let traces = Traces {

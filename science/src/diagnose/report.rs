@@ -245,6 +245,10 @@ pub struct Unidentified {
     pub value: f64,
     /// Its standard error (NaN or infinite when none can be computed).
     pub stderr: f64,
+    /// For J: how much higher than the truth least squares reads it because of the torque's own
+    /// noise (`plausibility::torque_noise_bias`), when that is what leaves it unidentified.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub torque_noise_bias: Option<f64>,
 }
 
 /// Relative standard error above which a parameter is not identified.
@@ -266,6 +270,7 @@ impl Unidentified {
             parameter,
             value,
             stderr,
+            torque_noise_bias: None,
         })
         .collect()
     }

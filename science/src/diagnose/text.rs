@@ -2,6 +2,7 @@
 
 use super::select::Decision;
 use super::structure::Condition;
+use super::EffectKind;
 use super::{Report, Verdict};
 use crate::figure::{Figure, Panel, Series, Style};
 
@@ -91,20 +92,30 @@ pub fn to_text(r: &Report, source: &str) -> String {
             c.effect.name(),
             dash(c.cv_gain_percent, ""),
             dash(c.simulation_gain_percent, ""),
-            decision_words(&c.decision)
+            decision_words(c.effect, &c.decision)
         );
     }
     s += "\n4. Verdict\n";
     for u in &r.unidentified {
-        s += &format!(
-            "   These data do not identify {}: {} = {:.4e} ± {:.1e} (more than {:.0} % of it, or no finite error); {}.\n",
-            u.parameter.symbol(),
-            u.parameter.symbol(),
-            u.value,
-            u.stderr,
-            super::MAX_RELATIVE_STDERR * 100.0,
-            u.parameter.advice()
-        );
+        s += &match u.torque_noise_bias {
+            Some(bias) => format!(
+                "   These data do not identify {}: the torque's noise is so large beside its swing that least squares reads {} about {:.0} % high ({} = {:.4e}; errors in the regressor, which no standard error shows); a run with a larger torque swing (a wider lo..hi) would.\n",
+                u.parameter.symbol(),
+                u.parameter.symbol(),
+                100.0 * bias.min(99.99),
+                u.parameter.symbol(),
+                u.value
+            ),
+            None => format!(
+                "   These data do not identify {}: {} = {:.4e} ± {:.1e} (more than {:.0} % of it, or no finite error); {}.\n",
+                u.parameter.symbol(),
+                u.parameter.symbol(),
+                u.value,
+                u.stderr,
+                super::MAX_RELATIVE_STDERR * 100.0,
+                u.parameter.advice()
+            ),
+        };
     }
     let identified = r.unidentified.is_empty();
     if r.effects.is_empty()
@@ -303,8 +314,20 @@ pub fn figure(r: &Report) -> Figure {
 }
 
 /// A decision in words.
-fn decision_words(d: &Decision) -> String {
+fn decision_words(effect: EffectKind, d: &Decision) -> String {
+    use super::candidate::Inadmissible;
+    use super::select::Rejection;
     match d {
+        // "No effect" of an exponent is the seed's own law: say so.
+        Decision::Rejected {
+            reason:
+                Rejection::Inadmissible {
+                    why: Inadmissible::NotResolved { value, stderr },
+                },
+        } if effect == EffectKind::DragExponent => format!(
+            "p = {value:.4} ± {stderr:.1e}: the seed's quadratic law holds (p = 2 within {} standard errors)",
+            super::RESOLVED
+        ),
         Decision::Named => "← named".into(),
         Decision::Ambiguous { with } => format!("ambiguous with {with}"),
         Decision::NearMiss => "near miss".into(),
