@@ -172,7 +172,11 @@ fn diagnose_named(
         )),
         _ => None,
     };
-    Ok((json(&report)?, to_text(&report, name), cannot_judge))
+    // As the command writes it: the report with its Result (rows with missing values dropped).
+    let outcome = propid_science::result::Outcome::from_diagnosis(&report, skipped as u64, None);
+    let value = propid::cmd::diagnose::json(&report, outcome.as_ref())
+        .map_err(|e| PropidError::new_err(e.to_string()))?;
+    Ok((json(&value)?, to_text(&report, name), cannot_judge))
 }
 
 /// `propid diagnose FILE`: (JSON, text, cannot-judge message).

@@ -134,11 +134,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         (Format::Text, None) => to_text(&report, &args.file.display().to_string()),
         (Format::Json, _) => {
-            let mut v = serde_json::to_value(&report)?;
-            if let (Some(o), Some(map)) = (&outcome, v.as_object_mut()) {
-                map.insert("result".into(), serde_json::to_value(o)?);
-            }
-            serde_json::to_string_pretty(&v)? + "\n"
+            serde_json::to_string_pretty(&json(&report, outcome.as_ref())?)? + "\n"
         }
         (Format::Yaml, Some(o)) => o.to_yaml(),
         (Format::Yaml, None) => String::new(),
@@ -151,4 +147,17 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => Ok(()),
     }
+}
+
+/// The diagnosis as `--format json` writes it: the report, with its Result under `result` (the
+/// Python package's `diagnose` gives the same).
+pub fn json(
+    report: &propid_science::diagnose::Report,
+    outcome: Option<&Outcome>,
+) -> serde_json::Result<serde_json::Value> {
+    let mut v = serde_json::to_value(report)?;
+    if let (Some(o), Some(map)) = (outcome, v.as_object_mut()) {
+        map.insert("result".into(), serde_json::to_value(o)?);
+    }
+    Ok(v)
 }
