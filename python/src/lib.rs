@@ -31,9 +31,7 @@ use pyo3::types::PyDict;
 
 use propid_io::import::{Imported, RcbenchOptions};
 use propid_io::tsv::{Row, Sample, TsvReader, HEADER};
-use propid_science::diagnose::{
-    diagnose_rows, read_rows, to_text, Options as DiagnoseOptions, Verdict,
-};
+use propid_science::diagnose::{diagnose_rows, read_rows, Options as DiagnoseOptions, Verdict};
 use propid_science::fit::{fit_columns as fit_in_memory, fit_path_with, Columns, FitOptions};
 
 create_exception!(
@@ -176,7 +174,8 @@ fn diagnose_named(
     let outcome = propid_science::result::Outcome::from_diagnosis(&report, skipped as u64, None);
     let value = propid::cmd::diagnose::json(&report, outcome.as_ref())
         .map_err(|e| PropidError::new_err(e.to_string()))?;
-    Ok((json(&value)?, to_text(&report, name), cannot_judge))
+    let text = propid::cmd::diagnose::text(&report, outcome.as_ref(), name);
+    Ok((json(&value)?, text, cannot_judge))
 }
 
 /// `propid diagnose FILE`: (JSON, text, cannot-judge message).

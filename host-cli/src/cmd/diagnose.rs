@@ -129,10 +129,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
     let text = match (args.format, &outcome) {
-        (Format::Text, Some(o)) => {
-            o.to_text() + "\n" + &to_text(&report, &args.file.display().to_string())
-        }
-        (Format::Text, None) => to_text(&report, &args.file.display().to_string()),
+        (Format::Text, _) => text(&report, outcome.as_ref(), &args.file.display().to_string()),
         (Format::Json, _) => {
             serde_json::to_string_pretty(&json(&report, outcome.as_ref())?)? + "\n"
         }
@@ -160,4 +157,17 @@ pub fn json(
         map.insert("result".into(), serde_json::to_value(o)?);
     }
     Ok(v)
+}
+
+/// The diagnosis as the text format writes it: the Result first, then the report (the Python
+/// package's `str(diagnosis)` gives the same).
+pub fn text(
+    report: &propid_science::diagnose::Report,
+    outcome: Option<&Outcome>,
+    source: &str,
+) -> String {
+    match outcome {
+        Some(o) => o.to_text() + "\n" + &to_text(report, source),
+        None => to_text(report, source),
+    }
 }
