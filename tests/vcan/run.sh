@@ -5,6 +5,9 @@
 #  - frames `propid drive` sends appear in candump with the right IDs and data, Classic (MTU 8)
 #    and CAN FD (MTU 64);
 #  - a DoF3rdTs frame cansend injects reaches `propid drive` and becomes a TSV row.
+#  The limits that need a drive answering (the soft start, the speed watchdog) are off: nothing
+#  drives a rotor here; one injected frame stands for the feedback (the limits are tested against the
+#  simulated Telega in drive_e2e and tests/readme_hardware.sh).
 # usage: tests/vcan/run.sh [path/to/propid]   (needs qemu-system-x86, linux-image-amd64,
 #                                              busybox-static, can-utils, cpio)
 set -euo pipefail
@@ -45,7 +48,7 @@ export UAVCAN__NODE__ID=10 UAVCAN__PUB__READINESS__ID=10 UAVCAN__PUB__SP_RAT__ID
 for mtu in 8 64; do
   candump -L vcan0 > /tmp/dump\$mtu.log & dump=\$!
   ( sleep 1; cansend vcan0 $inject ) &
-  UAVCAN__CAN__MTU=\$mtu propid drive --iface socketcan:vcan0 --init-duration 0.5 --pattern-duration 1.5 --deadman 5 --progress false -o /tmp/run\$mtu.tsv 2>/tmp/drive\$mtu.err
+  UAVCAN__CAN__MTU=\$mtu propid drive --iface socketcan:vcan0 --init-duration 0.5 --pattern-duration 1.5 --deadman 5 --soft-start-duration 0 --speed-watchdog 0 --progress false -o /tmp/run\$mtu.tsv 2>/tmp/drive\$mtu.err
   echo "VCAN-DRIVE-EXIT mtu=\$mtu status=\$?"
   sleep 0.2; kill \$dump
   echo "VCAN-CANDUMP mtu=\$mtu frames=\$(wc -l < /tmp/dump\$mtu.log)"

@@ -25,6 +25,10 @@ fn pc_time(text: &str) -> Option<f64> {
     if d.len() != 3 || t.len() != 4 {
         return None;
     }
+    // A calendar date (the day count below would overflow on a year of sixteen digits).
+    if !((1..=9999).contains(&d[0]) && (1..=12).contains(&d[1]) && (1..=31).contains(&d[2])) {
+        return None;
+    }
     // Days since a fixed epoch (civil calendar; exact for the Gregorian dates a log has).
     let (y, m) = if d[1] <= 2 {
         (d[0] - 1, d[1] + 9)
@@ -269,4 +273,18 @@ fn autoquad(
         dropped,
         warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pc_time;
+
+    #[test]
+    fn a_pc_time_outside_the_calendar_is_not_a_time() {
+        // The fuzzer's input: a sixteen-digit year overflowed the day count.
+        assert_eq!(pc_time("8888888888888888-11-05 17:14:08:947"), None);
+        assert_eq!(pc_time("2019-13-05 17:14:08:947"), None);
+        let t = pc_time("2019-11-05 17:14:08:947").unwrap();
+        assert_eq!(pc_time("2019-11-05 17:14:09:947").unwrap() - t, 1.0);
+    }
 }
