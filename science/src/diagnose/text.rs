@@ -50,7 +50,9 @@ pub fn to_text(r: &Report, source: &str) -> String {
     );
     s += "3. Candidate effects, searched in rounds: each tried on the model of the rounds before, scored on\n   \
           held-out data (blocked 10-fold cross-validation: the acceleration equation's error and the open-loop\n   \
-          simulated velocity's; gain = mean over the folds of the drop in the sum of their logs ± its standard error):\n";
+          simulated velocity's; equation and simulation: how much lower each pooled held-out error is, negative\n   \
+          when higher; gain = mean over the folds of the drop in the sum of their logs ± its standard error, and\n   \
+          in how many folds that sum drops: a gain can be consistent while one pooled error rises):\n";
     let mut round = usize::MAX;
     for c in &r.candidates {
         if c.round != round {
@@ -81,8 +83,11 @@ pub fn to_text(r: &Report, source: &str) -> String {
         };
         let gain = if c.gain.mean.is_finite() {
             format!(
-                "{:+.3} ± {:.3} ({}/10 folds)",
-                c.gain.mean, c.gain.stderr, c.gain.folds_better
+                "{:+.3} ± {:.3}, {}/{} folds",
+                c.gain.mean,
+                c.gain.stderr,
+                c.gain.folds_better,
+                super::FOLDS
             )
         } else {
             "–".into()
