@@ -789,12 +789,7 @@ fn report_of(
         &gate.iter().map(|s| s.force).collect::<Vec<f64>>(),
         &gate.iter().map(|s| s.velocity).collect::<Vec<f64>>(),
     );
-    if torque_bias > 0.02 && torque_bias <= plausibility::MAX_RELATIVE_STDERR {
-        warnings.push(format!(
-            "the torque's noise is large beside its swing: least squares reads mass about {:.0} % high (errors in the regressor); a wider lo..hi would shrink it",
-            100.0 * torque_bias
-        ));
-    }
+    warnings.extend(plausibility::torque_noise_warning("mass", torque_bias));
     for (k, name) in ["mass", "c1", "c2"].into_iter().enumerate() {
         if k == 1 && args.c1_max == 0.0 {
             continue;

@@ -318,6 +318,26 @@ pub enum NotIdentified {
     },
 }
 
+/// A predicted bias of J worth saying (below [`MAX_RELATIVE_STDERR`], where J is still taken as
+/// identified): what J is measured to.
+pub const BIAS_WORTH_SAYING: f64 = 0.02;
+
+/// The words for a bias `bias` of the parameter `name` from the torque's noise.
+pub fn torque_noise_words(name: &str, bias: f64) -> String {
+    format!(
+        "the torque's noise is large beside its swing: least squares reads {name} about {:.0} % high \
+         (errors in the regressor, which no standard error shows); a wider lo..hi would shrink it",
+        100.0 * bias.min(99.99)
+    )
+}
+
+/// The warning for a bias of `name` between [`BIAS_WORTH_SAYING`] and [`MAX_RELATIVE_STDERR`]
+/// (above it the parameter is not identified: [`NotIdentified::NoisyTorque`]).
+pub fn torque_noise_warning(name: &str, bias: f64) -> Option<String> {
+    (bias > BIAS_WORTH_SAYING && bias <= MAX_RELATIVE_STDERR)
+        .then(|| torque_noise_words(name, bias))
+}
+
 /// The relative bias of J that the torque column's white noise predicts for a least-squares fit
 /// of the seed's model: with σ² the noise variance (robustly from the sample-to-sample
 /// differences: 1.4826·MAD/√2, so steps and a held load cell's repeats do not count as noise) and
@@ -397,10 +417,8 @@ impl NotIdentified {
                 "{name} is not identified: the data give its value {value:e} no finite standard error"
             ),
             NotIdentified::NoisyTorque { bias } => format!(
-                "{name} is not identified: the torque's noise is so large beside its swing that least squares reads \
-                 {name} about {:.0} % high ({value:e}; errors in the regressor, which no standard error shows); \
-                 a run with a larger torque swing (a wider lo..hi) would identify it",
-                100.0 * bias.min(99.99)
+                "{name} is not identified ({value:e}): {}",
+                torque_noise_words(name, bias)
             ),
         }
     }

@@ -221,12 +221,7 @@ pub(crate) fn run(
     let mut unidentified = Unidentified::of(&extended);
     // Errors in the regressor: the torque's noise biases J beyond what its standard error says.
     let bias = crate::plausibility::torque_noise_bias(&s.force, &s.velocity);
-    if bias > 0.02 && bias <= crate::plausibility::MAX_RELATIVE_STDERR {
-        notes.push(format!(
-            "the torque's noise is large beside its swing: least squares reads J about {:.0} % high (errors in the regressor, which no standard error shows); a wider lo..hi would shrink it",
-            100.0 * bias
-        ));
-    }
+    notes.extend(crate::plausibility::torque_noise_warning("J", bias));
     if bias > crate::plausibility::MAX_RELATIVE_STDERR
         && !unidentified
             .iter()

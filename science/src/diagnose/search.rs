@@ -108,6 +108,23 @@ struct Trial {
     evidence: Evidence,
 }
 
+/// What effect `index` of `model` reads its value from in `fit` (`profile`: the standard error
+/// of its nonlinear parameter, computed only if asked).
+fn fitted<'a>(
+    model: &Model,
+    index: usize,
+    fit: &'a Fit,
+    profile: &'a dyn Fn() -> f64,
+) -> Fitted<'a> {
+    Fitted {
+        theta: &fit.theta,
+        stderr: &fit.stderr,
+        column: model.column_of(index),
+        rms: (fit.rss / fit.n.max(1.0)).sqrt(),
+        profile,
+    }
+}
+
 /// The value of effect `index` of `model` from `fit`, and whether it can be the effect.
 pub(crate) fn judged(
     model: &Model,
@@ -117,13 +134,7 @@ pub(crate) fn judged(
 ) -> (Estimate, Result<(), Inadmissible>) {
     let e = model.effects[index];
     let profile = || profiled(model, index, fit, s);
-    let fitted = Fitted {
-        theta: &fit.theta,
-        stderr: &fit.stderr,
-        column: model.column_of(index),
-        rms: (fit.rss / fit.n.max(1.0)).sqrt(),
-        profile: &profile,
-    };
+    let fitted = fitted(model, index, fit, &profile);
     let v = e.candidate().estimate(&e, &fitted);
     (v, e.candidate().admissible(&e, v, &fitted))
 }
@@ -138,13 +149,7 @@ pub(crate) fn spoiled(model: &Model, except: usize, fit: &Fit) -> Option<EffectK
         .filter(|&i| i != except)
         .find_map(|i| {
             let e = model.effects[i];
-            let fitted = Fitted {
-                theta: &fit.theta,
-                stderr: &fit.stderr,
-                column: model.column_of(i),
-                rms: (fit.rss / fit.n.max(1.0)).sqrt(),
-                profile: &no_profile,
-            };
+            let fitted = fitted(model, i, fit, &no_profile);
             let v = e.candidate().estimate(&e, &fitted);
             // Its sign and range alone: as if resolved.
             let sure = Estimate { stderr: 0.0, ..v };

@@ -104,12 +104,10 @@ pub fn to_text(r: &Report, source: &str) -> String {
     for u in &r.unidentified {
         s += &match u.torque_noise_bias {
             Some(bias) => format!(
-                "   These data do not identify {}: the torque's noise is so large beside its swing that least squares reads {} about {:.0} % high ({} = {:.4e}; errors in the regressor, which no standard error shows); a run with a larger torque swing (a wider lo..hi) would.\n",
+                "   These data do not identify {0} ({0} = {1:.4e}): {2}.\n",
                 u.parameter.symbol(),
-                u.parameter.symbol(),
-                100.0 * bias.min(99.99),
-                u.parameter.symbol(),
-                u.value
+                u.value,
+                crate::plausibility::torque_noise_words(u.parameter.symbol(), bias)
             ),
             None => format!(
                 "   These data do not identify {}: {} = {:.4e} ± {:.1e} (more than {:.0} % of it, or no finite error); {}.\n",
