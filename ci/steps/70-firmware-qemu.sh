@@ -5,6 +5,14 @@ set -euo pipefail
 command -v qemu-system-arm >/dev/null || DEBIAN_FRONTEND=noninteractive apt-get install -y -qq qemu-system-arm >/dev/null
 rustup target add thumbv7em-none-eabihf >/dev/null
 cd firmware-demo
+# Panic locations embed source paths, so the flash size would depend on where the clone and
+# CARGO_HOME live (8 bytes apart between two machines). Mapped to fixed prefixes, the build is
+# the same wherever it runs, and the figures the docs quote can be compared byte for byte.
+# (CARGO_ENCODED_RUSTFLAGS replaces .cargo/config.toml's rustflags, so the linker script is repeated.)
+root=$(cd .. && pwd)
+CARGO_ENCODED_RUSTFLAGS=$(printf '%s\x1f' -C link-arg=-Tlink.x "--remap-path-prefix=$root=/propid" \
+  "--remap-path-prefix=${CARGO_HOME:-$HOME/.cargo}=/cargo" | sed 's/\x1f$//')
+export CARGO_ENCODED_RUSTFLAGS
 cargo build --release -q
 elf=target/thumbv7em-none-eabihf/release/propid-firmware-demo
 if nm "$elf" | grep -Eq '__rust_alloc|__rg_alloc|__rdl_alloc'; then
