@@ -393,6 +393,7 @@ fn periodic(
         admissible,
         errors: scored.errors(),
         simulation_sees: true,
+        lag_in_samples: None,
     };
     if select::judge(&current.errors(), &evidence).is_some() {
         return None;

@@ -37,6 +37,29 @@ pub(crate) struct Cv {
     pub mse: f64,
     /// Held-out mean squared error per fold.
     pub folds: [f64; FOLDS],
+    /// Held-out simulated-velocity mean squared error per fold, where it was computed (a lag's
+    /// tuning: see `tune`).
+    pub simulation: Option<[f64; FOLDS]>,
+}
+
+impl Cv {
+    /// What a tuning minimises: with the simulation, the selection's own score, the mean over
+    /// the folds of ln eq_k + ln sim_k (a parameter is tuned where the model gains most by the
+    /// criterion that then judges it); without, the pooled equation error (its logarithm: the
+    /// same order).
+    pub fn objective(&self) -> f64 {
+        match &self.simulation {
+            Some(sim) => {
+                self.folds
+                    .iter()
+                    .zip(sim)
+                    .map(|(e, s)| e.ln() + s.ln())
+                    .sum::<f64>()
+                    / FOLDS as f64
+            }
+            None => self.mse.ln(),
+        }
+    }
 }
 
 /// A cross-validation with the parameters fitted without each fold (for its simulation).
@@ -216,6 +239,7 @@ fn cross_fit_n<const N: usize>(
         cv: Cv {
             mse: total / count.max(1.0),
             folds,
+            simulation: None,
         },
         thetas: fitted,
     })
@@ -268,6 +292,12 @@ pub(crate) fn cross_validate(model: &Model, s: &Signals) -> Option<Cv> {
     let p = model.prepare(s);
     let stride = (s.len() - s.first).div_ceil(TUNING_ROWS).max(1);
     by_width!(model, cross_fit_n, model, &p, s, false, stride).map(|c| c.cv)
+}
+
+/// As [`cross_fit`], on the rows a tuning reads (at most about [`TUNING_ROWS`]).
+pub(crate) fn cross_fit_for_tuning(model: &Model, p: &Prepared, s: &Signals) -> Option<CrossFit> {
+    let stride = (s.len() - s.first).div_ceil(TUNING_ROWS).max(1);
+    by_width!(model, cross_fit_n, model, p, s, true, stride)
 }
 
 /// The held-out acceleration scores of `model` on every row, with, per fold, the parameters

@@ -206,6 +206,14 @@ pub struct Evidence {
     pub errors: FoldErrors,
     /// Whether the simulation can see it.
     pub simulation_sees: bool,
+    /// For a lag (its time constant tuned by both held-out errors, `tune`), its delay in sample
+    /// periods; `None` for a term. A lag is a phase, which the simulation integrates over
+    /// seconds while the equation sees it only against the acceleration's noise, and no constant
+    /// bias the simulation could integrate: longer than a sample period the equation need not
+    /// gain by itself ([`Rejection::EquationSilent`]). Shorter, the simulation alone cannot
+    /// place it: the samples' own timing (a velocity read over its sample period, inputs
+    /// interpolated between samples, timestamps' jitter) moves it by as much.
+    pub lag_in_samples: Option<f64>,
 }
 
 /// Why an effect was not named.
@@ -315,7 +323,8 @@ pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
         return Some(Decision::rejected(Rejection::Inconsistent));
     }
     let (equation, _) = Gain::parts(parent, &e.errors);
-    if equation.mean < NEAR_MISS_GAIN {
+    let simulation_places_it = e.lag_in_samples.is_some_and(|n| n > 1.0);
+    if equation.mean < NEAR_MISS_GAIN && !simulation_places_it {
         return Some(Decision::rejected(Rejection::EquationSilent));
     }
     if gain.mean < MIN_GAIN {
@@ -487,6 +496,7 @@ mod tests {
             admissible: Ok(()),
             errors: errors(eq, sim),
             simulation_sees: true,
+            lag_in_samples: None,
         }
     }
 

@@ -15,7 +15,7 @@ use super::{EffectKind,
 use crate::diagnose::model::{At, Effect, LagForm, Lag, Prepared, impulse_gain};
 use crate::diagnose::select::consistent_equation_gain;
 use crate::diagnose::signals::{advanced, Signals};
-use crate::diagnose::tune::{golden, mse_of, Tuned, Tuner};
+use crate::diagnose::tune::{golden, objective_of, Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
 
 /// See the module documentation.
@@ -73,15 +73,15 @@ impl Candidate for ForceSensorLag {
         // offset or a viscous friction on the sine that the truth puts at zero.
         let found = cv.as_ref().zip(t.estimate(first_order)).and_then(|(c, (_, _, v))| {
             (admissible_lag(v).is_ok() && consistent_equation_gain(&t.parent.folds, &c.folds))
-                .then_some((c.mse, v.value))
+                .then_some((c.objective(), v.value))
         });
         let Some((first_mse, lag)) = found else {
             return Some((first_order, cv));
         };
         let delayed = |d: f64| Effect::with_form(t.kind, d, LagForm::Delay);
-        let d = golden(0.5 * lag, 2.0 * lag, |d| mse_of(&t.cv(delayed(d))), 14);
+        let d = golden(0.5 * lag, 2.0 * lag, |d| objective_of(&t.cv(delayed(d))), 14);
         let delayed_cv = t.cv(delayed(d));
-        Some(if mse_of(&delayed_cv) < first_mse {
+        Some(if objective_of(&delayed_cv) < first_mse {
             (delayed(d), delayed_cv)
         } else {
             (first_order, cv)
