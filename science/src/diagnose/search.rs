@@ -17,7 +17,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde::Serialize;
 
-use super::candidate::{EffectKind, Estimate, Fitted, Inadmissible, Slot};
+use super::candidate::{EffectKind, Estimate, Fitted, Inadmissible};
 use super::engine::{cross_validate, fit_on_all, Cv, Fit};
 use super::model::{Effect, Model};
 use super::select::{self, Decision, Evidence, FoldErrors, Gain, Rejection};
@@ -226,7 +226,7 @@ fn try_effect(
             admissible,
             errors: scored.errors(),
             simulation_sees: candidate.simulation_sees(),
-            lag_in_samples: (candidate.slot() == Slot::Lag)
+            lag_in_samples: candidate.tuned_by_simulation()
                 .then(|| candidate.lag(&effect, estimate.value))
                 .flatten()
                 .map(|l| l.delay * s.rate),

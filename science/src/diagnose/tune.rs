@@ -11,7 +11,7 @@
 //! while the simulation integrates the torque over seconds, where the noise averages out and the
 //! phase does not.
 
-use super::candidate::{EffectKind, Estimate, Slot};
+use super::candidate::{EffectKind, Estimate};
 use super::engine::{cross_validate, fit_on_all, Cv, Fit};
 use super::model::{Effect, Model};
 use super::signals::Signals;
@@ -48,7 +48,7 @@ impl Tuner<'_> {
     /// module documentation).
     pub fn cv(&self, e: Effect) -> Option<Cv> {
         let m = self.model.with(e)?;
-        if self.kind.candidate().slot() == Slot::Lag {
+        if self.kind.candidate().tuned_by_simulation() {
             tuning_scores(&m, self.s, self.plan)
         } else {
             cross_validate(&m, self.s)

@@ -122,6 +122,9 @@ impl Candidate for AccelerationLag {
     fn simulation_sees(&self) -> bool {
         true
     }
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }
