@@ -205,28 +205,32 @@ fn fit_n<const N: usize>(
     })
 }
 
-/// Least squares with the force's noise taken out of its regressor: the measured force carries
+/// The parameters with the force's noise taken out of its regressor: the measured force carries
 /// white noise of σ_F (`Signals::force_noise`, as much of it as the model's transformation of the
-/// force lets through), which adds n·σ_F² to the force's diagonal of ΦᵀΦ and reads its
-/// coefficient 1/J low by that share of the force's variance left after the other regressors
-/// (errors in the regressor; the drag takes most of the force's variance on a slow pattern, and
-/// on the independent stand J came out 0.3–3 % high). Those parameters simulate the held-out
-/// folds: a simulation integrates the J error over seconds, and a lag that smooths the force's
-/// noise (any lag, of any length) would otherwise gain there for shrinking the bias, not for
-/// being there — a 0.5 ms "torque lag" on clean data gained 17 % in simulation.
+/// force lets through), which adds n·σ_F² to the force's diagonal of ΦᵀΦ (and of ZᵀΦ: the force
+/// is its own instrument) and reads its coefficient 1/J low by that share of the force's variance
+/// left after the other regressors (errors in the regressor; on a slow pattern the drag takes
+/// most of the force's variance, and on the independent stand J came out 0.3–3 % high). Those
+/// parameters simulate the held-out folds: a simulation integrates the J error over seconds, and
+/// a lag that smooths the force's noise (any lag, of any length) would otherwise gain there for
+/// shrinking the bias, not for being there — a 0.5 ms "torque lag" on clean data gained 17 % in
+/// simulation.
 fn without_force_noise<const N: usize>(
-    ls: &NormalEquations<f64, N>,
+    train: &Stats<N>,
     p: &Prepared,
     s: &Signals,
 ) -> Option<[f64; N]> {
-    let mut corrected = *ls;
-    let c = ls.count() * s.force_noise * s.force_noise * p.force_noise_gain;
+    let c = train.least_squares().count() * s.force_noise * s.force_noise * p.force_noise_gain;
+    let mut corrected = *train;
     if c > 0.0 && c.is_finite() {
         let mut phi = [0.0; N];
         phi[0] = c.sqrt();
-        corrected.update_weighted(&phi, 0.0, -1.0);
+        match &mut corrected {
+            Stats::Ls(ne) => ne.update_weighted(&phi, 0.0, -1.0),
+            Stats::Iv(iv) => iv.update(&phi, &phi.map(|x| -x), 0.0),
+        }
     }
-    corrected.solve().ok().map(|s| s.theta)
+    corrected.solve().map(|(theta, _)| theta)
 }
 
 fn cross_fit_n<const N: usize>(
@@ -256,11 +260,7 @@ fn cross_fit_n<const N: usize>(
         total += rss;
         count += n;
         if thetas {
-            fitted.push(if iv {
-                train.solve()?.0.to_vec()
-            } else {
-                without_force_noise(train.least_squares(), p, s)?.to_vec()
-            });
+            fitted.push(without_force_noise(&train, p, s)?.to_vec());
         }
     }
     Some(CrossFit {

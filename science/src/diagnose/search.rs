@@ -226,7 +226,9 @@ fn try_effect(
             admissible,
             errors: scored.errors(),
             simulation_sees: candidate.simulation_sees(),
-            lag_in_samples: candidate.tuned_by_simulation()
+            // A lag whose value is a regression column's coefficient (a force sensor's
+            // first-order lag: the force's slope) is a term of the equation, judged like one.
+            lag_in_samples: (candidate.tuned_by_simulation() && candidate.columns(&effect) == 0)
                 .then(|| candidate.lag(&effect, estimate.value))
                 .flatten()
                 .map(|l| l.delay * s.rate),

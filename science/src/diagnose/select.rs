@@ -206,8 +206,8 @@ pub struct Evidence {
     pub errors: FoldErrors,
     /// Whether the simulation can see it.
     pub simulation_sees: bool,
-    /// For a lag (its time constant tuned by both held-out errors, `tune`), its delay in sample
-    /// periods; `None` for a term. A lag is a phase, which the simulation integrates over
+    /// For a lag whose time constant is tuned by both held-out errors (`tune`), its delay in
+    /// sample periods; `None` for a term (or a lag that enters the equation as a column). A lag is a phase, which the simulation integrates over
     /// seconds while the equation sees it only against the acceleration's noise, and no constant
     /// bias the simulation could integrate: longer than a sample period the equation need not
     /// gain by itself ([`Rejection::EquationSilent`]). Shorter, the simulation alone cannot
