@@ -12,7 +12,7 @@
 
 use std::ops::Range;
 
-use super::engine::{cross_fit, cross_fit_for_tuning, Cv, CrossFit};
+use super::engine::{cross_fit, cross_fit_for_tuning, CrossFit, Cv};
 use super::model::{Model, Prepared, Speed, MAX_COLUMNS};
 use super::signals::Signals;
 use super::FOLDS;
@@ -91,7 +91,13 @@ pub(crate) fn tuning_scores(model: &Model, s: &Signals, plan: &SimPlan) -> Optio
     })
 }
 
-fn scores_of(model: &Model, p: &Prepared, cf: &CrossFit, s: &Signals, plan: &SimPlan) -> FoldScores {
+fn scores_of(
+    model: &Model,
+    p: &Prepared,
+    cf: &CrossFit,
+    s: &Signals,
+    plan: &SimPlan,
+) -> FoldScores {
     let mut simulation = [0.0; FOLDS];
     for (k, windows) in plan.windows.iter().enumerate() {
         let (mut sum, mut count) = (0.0, 0usize);
