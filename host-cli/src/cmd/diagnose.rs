@@ -85,8 +85,19 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar.set_message(format!("reading {}", args.file.display()));
-    let table = propid_io::tsv::read_rows(&args.file, |row| row.sample.is_finite())?;
-    let (notes, skipped, rows) = (table.notes(), table.skipped, table.rows);
+    // A stand's thrust cell updates on rows of its own (the torque's are others): rows with a
+    // stand measurement are kept for C_T (which then rests on the rows `propid propulsion`
+    // reads) and left out of the diagnosis like any row with a missing value.
+    let table = propid_io::tsv::read_rows(&args.file, |row| {
+        row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
+    })?;
+    let (notes, mut skipped, mut rows) = (table.notes(), table.skipped, table.rows);
+    let reading = args.reading.reading();
+    let thrust =
+        propid_science::propulsion::read::thrust_of_rows(&rows, &table.stand_columns, &reading);
+    let read = rows.len();
+    rows.retain(|row| row.sample.is_finite());
+    skipped += read - rows.len();
     let max_effects = args.max_effects;
     let progress = |stage: Stage| {
         bar.set_message(match stage {
@@ -101,7 +112,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         rows,
         Options {
             max_effects,
-            reading: args.reading.reading(),
+            reading,
         },
         &progress,
     );
@@ -127,7 +138,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
     }
-    let outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
+    let mut outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
+    if let (Some(o), Some(rec)) = (outcome.as_mut(), &thrust) {
+        // The report's notes do not carry what C_T's identification says: stderr does.
+        let before = o.warnings.len();
+        o.add_thrust(rec);
+        for w in &o.warnings[before..] {
+            eprintln!("warning: {w}");
+        }
+    }
     let text = match (args.format, &outcome) {
         (Format::Text, _) => text(&report, outcome.as_ref(), &args.file.display().to_string()),
         (Format::Json, _) => {

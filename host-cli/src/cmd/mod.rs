@@ -40,7 +40,7 @@ impl ReadingArgs {
 }
 
 /// Air density when none is given [kg/m³].
-pub const DENSITY: f64 = 1.225;
+pub const DENSITY: f64 = propid_science::propulsion::air::ISA_DENSITY;
 
 /// The propeller and the air, for C_Q (`fit`, `diagnose`, `report`).
 #[derive(clap::Args, Debug)]
