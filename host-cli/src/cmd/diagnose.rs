@@ -85,19 +85,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar.set_message(format!("reading {}", args.file.display()));
-    // A stand's thrust cell updates on rows of its own (the torque's are others): rows with a
-    // stand measurement are kept for C_T (which then rests on the rows `propid propulsion`
-    // reads) and left out of the diagnosis like any row with a missing value.
-    let table = propid_io::tsv::read_rows(&args.file, |row| {
-        row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
-    })?;
-    let (notes, mut skipped, mut rows) = (table.notes(), table.skipped, table.rows);
     let reading = args.reading.reading();
-    let thrust =
-        propid_science::propulsion::read::thrust_of_rows(&rows, &table.stand_columns, &reading);
-    let read = rows.len();
-    rows.retain(|row| row.sample.is_finite());
-    skipped += read - rows.len();
+    let super::DiagnosisInput {
+        rows,
+        skipped,
+        notes,
+        thrust,
+    } = super::DiagnosisInput::read(&args.file, &reading)?;
     let max_effects = args.max_effects;
     let progress = |stage: Stage| {
         bar.set_message(match stage {

@@ -81,3 +81,46 @@ impl PropellerArgs {
         }))
     }
 }
+
+/// What `diagnose` and `report` read: the rows the diagnosis uses (every value of the sample
+/// finite), and the recording a Result's C_T rests on where the file has a thrust column.
+pub struct DiagnosisInput {
+    /// Rows with t, force, velocity and acceleration all finite.
+    pub rows: Vec<propid_io::tsv::Row>,
+    /// Rows read but left out (a missing value).
+    pub skipped: usize,
+    /// What the reader noticed (a cut last line, repeated times).
+    pub notes: Vec<String>,
+    /// Time, speed and thrust ([`propid_science::propulsion::read::thrust_of_rows`]).
+    pub thrust: Option<propid_science::propulsion::Recording>,
+}
+
+impl DiagnosisInput {
+    /// Reads `path`. A stand's thrust cell updates on rows of its own (the torque's are others):
+    /// rows with a stand measurement are read for C_T, which then rests on the rows
+    /// `propid propulsion` reads, and left out of the diagnosis like any row with a missing
+    /// value.
+    pub fn read(
+        path: &std::path::Path,
+        reading: &propid_science::plausibility::Reading,
+    ) -> Result<DiagnosisInput, propid_io::InputError> {
+        let table = propid_io::tsv::read_rows(path, |row| {
+            row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
+        })?;
+        let notes = table.notes();
+        let thrust = propid_science::propulsion::read::thrust_of_rows(
+            &table.rows,
+            &table.stand_columns,
+            reading,
+        );
+        let mut rows = table.rows;
+        let read = rows.len();
+        rows.retain(|row| row.sample.is_finite());
+        Ok(DiagnosisInput {
+            skipped: table.skipped + read - rows.len(),
+            rows,
+            notes,
+            thrust,
+        })
+    }
+}

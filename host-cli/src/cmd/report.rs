@@ -15,7 +15,6 @@ use std::io::Write;
 
 use propid_io::input::Mappable;
 use propid_io::output::AtomicOutput;
-use propid_io::tsv::read_rows;
 use propid_science::diagnose::{diagnose, report_figure, to_text, Options};
 use propid_science::fit::{figure, fit_path, FitError, FitOptions, FitReport};
 use propid_science::result::{Air, Outcome};
@@ -122,10 +121,13 @@ fn build_from(
     sections.push(s);
     sections.push(html::figure_section(&figure(&fit, &fit_samples), "fit"));
 
-    let table = read_rows(tsv, |row| row.sample.is_finite()).map_err(|e| input.rename(e))?;
-    let skipped = table.skipped;
-    let notes = table.notes();
-    let samples: Vec<_> = table.rows.into_iter().map(|row| row.sample).collect();
+    let super::DiagnosisInput {
+        rows,
+        skipped,
+        notes,
+        thrust,
+    } = super::DiagnosisInput::read(tsv, &fit_options.reading).map_err(|e| input.rename(e))?;
+    let samples: Vec<_> = rows.into_iter().map(|row| row.sample).collect();
     let options = Options {
         reading: fit_options.reading,
         ..Options::default()
@@ -160,6 +162,9 @@ fn build_from(
             "<section><h2>Diagnosis</h2><p class=\"verdict\">cannot judge: {}</p></section>\n",
             html::escape(&e.to_string())
         )),
+    }
+    if let Some(rec) = &thrust {
+        outcome.add_thrust(rec);
     }
 
     // The headline: the Result (the extended model's where the diagnosis could judge).
