@@ -124,3 +124,9 @@ impl DiagnosisInput {
         })
     }
 }
+
+/// A speed flag's value: rad/s, or rpm with `rpm` (`12000rpm`), as every speed flag takes it.
+pub fn speed(text: &str) -> Result<f64, String> {
+    propid_drive_proto::settings::parse_speed(text)
+        .ok_or_else(|| format!("`{text}` is not a speed: give rad/s (1256.6) or rpm (12000rpm)"))
+}
