@@ -291,7 +291,14 @@ fn c_t_of_a_real_log_is_propid_propulsion_s() {
     assert_eq!(json["thrust"]["method"], "plateaus");
     // report.html's Result, the same.
     let html = dir.path().join("rc.html");
-    propid_ok(&["report", t, "--diameter", "7in", "-o", html.to_str().unwrap()]);
+    propid_ok(&[
+        "report",
+        t,
+        "--diameter",
+        "7in",
+        "-o",
+        html.to_str().unwrap(),
+    ]);
     let html = std::fs::read_to_string(&html).unwrap();
     let c_t = json["thrust"]["c_t"]["value"].as_f64().unwrap();
     assert!(html.contains(&format!("C_T  = {c_t:.4e} ±")), "{c_t}");

@@ -285,14 +285,37 @@ fn speed_flags_take_rpm() {
     let dir = tempfile::tempdir().unwrap();
     let run = |name: &str, flags: &[&str]| {
         let tsv = dir.path().join(name);
-        let base = ["sim", "--stand", "mechanism", "--duration", "1", "--breakaway", "0.01"];
-        let out = propid(&[&base[..], flags, &["-o", tsv.to_str().unwrap()]].concat(), None);
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let base = [
+            "sim",
+            "--stand",
+            "mechanism",
+            "--duration",
+            "1",
+            "--breakaway",
+            "0.01",
+        ];
+        let out = propid(
+            &[&base[..], flags, &["-o", tsv.to_str().unwrap()]].concat(),
+            None,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         std::fs::read(tsv).unwrap()
     };
     let rpm = 10.0 * 60.0 / std::f64::consts::TAU;
     assert_eq!(
-        run("rad.tsv", &["--stribeck-speed", "10", "--cq-reference-speed", "1500rad/s"]),
+        run(
+            "rad.tsv",
+            &[
+                "--stribeck-speed",
+                "10",
+                "--cq-reference-speed",
+                "1500rad/s"
+            ]
+        ),
         run(
             "rpm.tsv",
             &[

@@ -166,4 +166,3 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
     eprintln!("plan: written to {}", args.output.display());
     Ok(())
 }
-

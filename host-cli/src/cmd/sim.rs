@@ -618,7 +618,11 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             return Err(InputError::invalid(format!(
                 "{} {} only to --stand mechanism",
                 changed.join(", "),
-                if changed.len() == 1 { "applies" } else { "apply" }
+                if changed.len() == 1 {
+                    "applies"
+                } else {
+                    "apply"
+                }
             ))
             .into());
         }
