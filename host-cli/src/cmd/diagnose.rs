@@ -44,6 +44,11 @@ pub struct Args {
     /// How the columns are read.
     #[command(flatten)]
     pub reading: super::ReadingArgs,
+    /// Leave out the rows whose velocity is a glitch (a sample that jumps away from both
+    /// neighbours and straight back, as an optical probe's missed mark does); without it they are
+    /// announced and kept.
+    #[arg(long)]
+    pub despike: bool,
     /// The propeller and air, for C_Q.
     #[command(flatten)]
     pub propeller: super::PropellerArgs,
@@ -91,7 +96,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         skipped,
         notes,
         thrust,
-    } = super::DiagnosisInput::read(&args.file, &reading)?;
+    } = super::DiagnosisInput::read(&args.file, &reading, args.despike)?;
     let max_effects = args.max_effects;
     let progress = |stage: Stage| {
         bar.set_message(match stage {

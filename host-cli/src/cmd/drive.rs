@@ -791,7 +791,7 @@ impl<A: Write, B: Write> Write for Tee<A, B> {
 /// none. Never fails the command: the run itself is what its exit status reports.
 fn result_of_recording(path: &std::path::Path) -> String {
     let reading = propid_science::plausibility::Reading::default();
-    let input = match super::DiagnosisInput::read(path, &reading) {
+    let input = match super::DiagnosisInput::read(path, &reading, false) {
         Ok(input) => input,
         Err(e) => return format!("drive: no Result: {e}\n"),
     };

@@ -100,14 +100,18 @@ impl DiagnosisInput {
     /// rows with a stand measurement are read for C_T, which then rests on the rows
     /// `propid propulsion` reads, and left out of the diagnosis like any row with a missing
     /// value.
+    ///
+    /// Velocity glitches (a sample that jumps away from both neighbours and straight back) are
+    /// announced in the notes, and left out when `despike`.
     pub fn read(
         path: &std::path::Path,
         reading: &propid_science::plausibility::Reading,
+        despike: bool,
     ) -> Result<DiagnosisInput, propid_io::InputError> {
         let table = propid_io::tsv::read_rows(path, |row| {
             row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
         })?;
-        let notes = table.notes();
+        let mut notes = table.notes();
         let thrust = propid_science::propulsion::read::thrust_of_rows(
             &table.rows,
             &table.stand_columns,
@@ -116,6 +120,11 @@ impl DiagnosisInput {
         let mut rows = table.rows;
         let read = rows.len();
         rows.retain(|row| row.sample.is_finite());
+        notes.extend(propid_io::import::tsv_glitches(
+            &table.name,
+            &mut rows,
+            despike,
+        ));
         Ok(DiagnosisInput {
             skipped: table.skipped + read - rows.len(),
             rows,

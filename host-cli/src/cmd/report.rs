@@ -126,7 +126,8 @@ fn build_from(
         skipped,
         notes,
         thrust,
-    } = super::DiagnosisInput::read(tsv, &fit_options.reading).map_err(|e| input.rename(e))?;
+    } = super::DiagnosisInput::read(tsv, &fit_options.reading, false)
+        .map_err(|e| input.rename(e))?;
     let samples: Vec<_> = rows.into_iter().map(|row| row.sample).collect();
     let options = Options {
         reading: fit_options.reading,

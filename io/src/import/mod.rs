@@ -256,6 +256,27 @@ pub(crate) fn duplicates_warning(n: usize, rows: usize) -> String {
     )
 }
 
+/// Velocity glitches ([`velocity_spikes`]) in `rows`, with the floor every reader uses: 2 % of
+/// the top speed. Returns the rows' indices and the largest jump.
+fn glitches(rows: &[Row]) -> (Vec<usize>, f64) {
+    let t: Vec<f64> = rows.iter().map(|r| r.sample.t).collect();
+    let v: Vec<f64> = rows.iter().map(|r| r.sample.velocity).collect();
+    let top = v
+        .iter()
+        .filter(|x| x.is_finite())
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    velocity_spikes(&t, &v, 0.02 * top)
+}
+
+/// The sentence about `n` glitches in `column`, the largest `largest`, the first ten found at
+/// `places`, and what was done about them.
+fn glitch_sentence(column: &str, n: usize, largest: &str, places: &str, done: &str) -> String {
+    format!(
+        "`{column}`: {n} samples jump away from their neighbours and straight back (by up to {largest}, more than 2 % of the top speed and ten times the log's own scatter): glitches of the probe, not of the rotor ({places}{}); {done}",
+        if n > 10 { ", …" } else { "" },
+    )
+}
+
 /// Finds velocity glitches ([`velocity_spikes`], floor 2 % of the top speed) in `rows` (from the
 /// log's `lines`), warns about them, and when `remove` sets their velocity to NaN (so neither
 /// they nor the accelerations next to them are used; nothing is interpolated).
@@ -266,13 +287,7 @@ pub(crate) fn despike(
     remove: bool,
     warnings: &mut Vec<String>,
 ) {
-    let t: Vec<f64> = rows.iter().map(|r| r.sample.t).collect();
-    let v: Vec<f64> = rows.iter().map(|r| r.sample.velocity).collect();
-    let top = v
-        .iter()
-        .filter(|x| x.is_finite())
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    let (spikes, largest) = velocity_spikes(&t, &v, 0.02 * top);
+    let (spikes, largest) = glitches(rows);
     if spikes.is_empty() {
         return;
     }
@@ -281,23 +296,59 @@ pub(crate) fn despike(
         .take(10)
         .map(|&k| lines[k].to_string())
         .collect();
-    warnings.push(format!(
-        "`{speed_name}`: {} samples jump away from their neighbours and straight back (by up to {:.0} rpm, more than 2 % of the top speed and ten times the log's own scatter): glitches of the probe, not of the rotor (lines {}{}); {}",
+    warnings.push(glitch_sentence(
+        speed_name,
         spikes.len(),
-        largest * 60.0 / std::f64::consts::TAU,
-        shown.join(", "),
-        if spikes.len() > 10 { ", …" } else { "" },
+        &format!("{:.0} rpm", largest * 60.0 / std::f64::consts::TAU),
+        &format!("lines {}", shown.join(", ")),
         if remove {
             "their velocity is NaN in the TSV (--despike), so neither they nor the accelerations beside them are used"
         } else {
             "kept: each puts a false pair of large accelerations into the data; --despike sets them to NaN"
-        }
+        },
     ));
     if remove {
         for k in spikes {
             rows[k].sample.velocity = f64::NAN;
         }
     }
+}
+
+/// Velocity glitches in the rows of a TSV (`name`): what to tell the user, naming the rows by
+/// their time, and, when `remove`, the rows left without them (a glitch's acceleration column is
+/// the file's own, so the row is dropped whole). `None` when there are none.
+pub fn tsv_glitches(name: &str, rows: &mut Vec<Row>, remove: bool) -> Option<String> {
+    let (spikes, largest) = glitches(rows);
+    if spikes.is_empty() {
+        return None;
+    }
+    let times: Vec<String> = spikes
+        .iter()
+        .take(10)
+        .map(|&k| format!("{:.4}", rows[k].sample.t))
+        .collect();
+    let sentence = format!("{name}: ")
+        + &glitch_sentence(
+            "velocity",
+            spikes.len(),
+            &format!("{largest:.4e} in the column's unit"),
+            &format!("t = {} s", times.join(", ")),
+            if remove {
+                "those rows are left out (--despike)"
+            } else {
+                "kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; --despike leaves those rows out"
+            },
+        );
+    if remove {
+        let mut k = 0;
+        let mut next = spikes.iter().peekable();
+        rows.retain(|_| {
+            let drop = next.next_if_eq(&&k).is_some();
+            k += 1;
+            !drop
+        });
+    }
+    Some(sentence)
 }
 
 /// A column an importer keeps beyond the TSV's known ones (readers ignore it).
