@@ -302,4 +302,25 @@ fn c_t_of_a_real_log_is_propid_propulsion_s() {
     let html = std::fs::read_to_string(&html).unwrap();
     let c_t = json["thrust"]["c_t"]["value"].as_f64().unwrap();
     assert!(html.contains(&format!("C_T  = {c_t:.4e} ±")), "{c_t}");
+    // And its propulsion section: `propid propulsion`'s text (the plateaus with the efficiency
+    // η of each) and plot; a value the fit does not identify is not in a title.
+    let text =
+        String::from_utf8(propid_ok(&["propulsion", t, "--diameter", "7in"]).stdout).unwrap();
+    let escaped = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let c_t_line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("C_T ="))
+        .unwrap();
+    assert!(html.contains("<h2>Propulsion: thrust, torque, power and the motor</h2>"));
+    assert!(html.contains(&escaped(c_t_line)), "{c_t_line}");
+    assert!(html.contains("η gf/W_e"));
+    assert!(!html.contains("J = 1.0000e3"));
+    let bare = dir.path().join("bare.html");
+    propid_ok(&["report", t, "-o", bare.to_str().unwrap()]);
+    let bare = std::fs::read_to_string(&bare).unwrap();
+    assert!(bare.contains("give <code>--diameter</code>"));
 }

@@ -890,10 +890,23 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
         .map(|s| (s.force - r.c1 * s.velocity - r.c2 * s.velocity * s.velocity.abs()) / r.mass)
         .collect();
     Figure {
-        title: format!(
-            "propid fit: J = {:.4e} kg·m², c1 = {:.3e}, c2 = {:.4e} (RMS {:.3e} rad/s²)",
-            r.mass, r.c1, r.c2, r.rms
-        ),
+        title: {
+            // A value the data do not identify is not quoted as one (a J on its bound of 1e3).
+            let value = |name: &str, symbol: &str, v: f64, unit: &str| {
+                if r.not_identified.contains(&name) {
+                    format!("{symbol} not identified")
+                } else {
+                    format!("{symbol} = {v:.4e}{unit}")
+                }
+            };
+            format!(
+                "propid fit: {}, {}, {} (RMS {:.3e} rad/s²)",
+                value("mass", "J", r.mass, " kg·m²"),
+                value("c1", "c1", r.c1 + 0.0, ""),
+                value("c2", "c2", r.c2, ""),
+                r.rms
+            )
+        },
         x_label: "t [s]".into(),
         panels: vec![
             Panel {

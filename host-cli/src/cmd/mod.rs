@@ -108,29 +108,46 @@ impl DiagnosisInput {
         reading: &propid_science::plausibility::Reading,
         despike: bool,
     ) -> Result<DiagnosisInput, propid_io::InputError> {
-        let table = propid_io::tsv::read_rows(path, |row| {
-            row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
-        })?;
-        let mut notes = table.notes();
-        let thrust = propid_science::propulsion::read::thrust_of_rows(
-            &table.rows,
+        let table = propid_io::tsv::read_rows(path, DiagnosisInput::keep)?;
+        let notes = table.notes();
+        Ok(DiagnosisInput::from_rows(
+            &table.name,
+            table.rows,
+            table.skipped,
             &table.stand_columns,
+            notes,
             reading,
-        );
-        let mut rows = table.rows;
+            despike,
+        ))
+    }
+
+    /// The rows [`DiagnosisInput::read`] keeps of a file: those with a complete sample, or a
+    /// stand measurement.
+    pub fn keep(row: &propid_io::tsv::Row) -> bool {
+        row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
+    }
+
+    /// [`DiagnosisInput::read`] of rows already read (those [`DiagnosisInput::keep`] keeps, of
+    /// a file `name` with the stand columns `columns`; `skipped` others; `notes` the reader's).
+    pub fn from_rows(
+        name: &str,
+        mut rows: Vec<propid_io::tsv::Row>,
+        skipped: usize,
+        columns: &[propid_io::tsv::StandColumn],
+        mut notes: Vec<String>,
+        reading: &propid_science::plausibility::Reading,
+        despike: bool,
+    ) -> DiagnosisInput {
+        let thrust = propid_science::propulsion::read::thrust_of_rows(&rows, columns, reading);
         let read = rows.len();
         rows.retain(|row| row.sample.is_finite());
-        notes.extend(propid_io::import::tsv_glitches(
-            &table.name,
-            &mut rows,
-            despike,
-        ));
-        Ok(DiagnosisInput {
-            skipped: table.skipped + read - rows.len(),
+        notes.extend(propid_io::import::tsv_glitches(name, &mut rows, despike));
+        DiagnosisInput {
+            skipped: skipped + read - rows.len(),
             rows,
             notes,
             thrust,
-        })
+        }
     }
 }
 
