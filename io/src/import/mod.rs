@@ -203,52 +203,6 @@ pub(crate) fn describe_dropped(dropped: &[Dropped], rows: usize) -> Option<Strin
     ))
 }
 
-/// Velocity glitches: samples that jump away from both neighbours and straight back (a
-/// reflective mark missed or seen twice by an optical probe), by more than `floor` and more
-/// than ten times the log's own sample-to-sample scatter. Runs of a held value count as one
-/// sample. Returns the row indices of the glitches and the largest jump.
-pub(crate) fn velocity_spikes(t: &[f64], v: &[f64], floor: f64) -> (Vec<usize>, f64) {
-    // The distinct values in order: (first row, last row of the run, time, value).
-    let mut runs: Vec<(usize, usize, f64, f64)> = Vec::new();
-    for (k, (&tk, &vk)) in t.iter().zip(v).enumerate() {
-        if !vk.is_finite() {
-            continue;
-        }
-        match runs.last_mut() {
-            Some(r) if r.3 == vk => r.1 = k,
-            _ => runs.push((k, k, tk, vk)),
-        }
-    }
-    // Each value's departure from the line through its neighbours, and how far the neighbours
-    // themselves are apart (a real step moves the neighbours too).
-    let departures: Vec<(f64, f64)> = runs
-        .windows(3)
-        .map(|w| {
-            let (a, b, c) = (w[0], w[1], w[2]);
-            let span = c.2 - a.2;
-            let line = if span > 0.0 {
-                a.3 + (c.3 - a.3) * (b.2 - a.2) / span
-            } else {
-                0.5 * (a.3 + c.3)
-            };
-            ((b.3 - line).abs(), (c.3 - a.3).abs())
-        })
-        .collect();
-    let mut scale: Vec<f64> = departures.iter().map(|d| d.0).collect();
-    let scatter = 1.4826 * median(&mut scale).unwrap_or(0.0);
-    let limit = floor.max(10.0 * scatter);
-    let mut spikes = Vec::new();
-    let mut largest = 0.0f64;
-    for (k, &(d, across)) in departures.iter().enumerate() {
-        if d > limit && d > across {
-            let (first, last, ..) = runs[k + 1];
-            spikes.extend(first..=last);
-            largest = largest.max(d);
-        }
-    }
-    (spikes, largest)
-}
-
 /// What to say about `n` rows dropped as copies of the line before them.
 pub(crate) fn duplicates_warning(n: usize, rows: usize) -> String {
     format!(
@@ -256,28 +210,17 @@ pub(crate) fn duplicates_warning(n: usize, rows: usize) -> String {
     )
 }
 
-/// Velocity glitches ([`velocity_spikes`]) in `rows`, with the floor every reader uses: 2 % of
-/// the top speed. Returns the rows' indices and the largest jump.
+/// Velocity glitches ([`crate::glitch`]) in `rows`: the rows' indices and the largest jump.
 fn glitches(rows: &[Row]) -> (Vec<usize>, f64) {
-    let t: Vec<f64> = rows.iter().map(|r| r.sample.t).collect();
     let v: Vec<f64> = rows.iter().map(|r| r.sample.velocity).collect();
-    let top = v
-        .iter()
-        .filter(|x| x.is_finite())
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    velocity_spikes(&t, &v, 0.02 * top)
-}
-
-/// The sentence about `n` glitches in `column`, the largest `largest`, the first ten found at
-/// `places`, and what was done about them.
-fn glitch_sentence(column: &str, n: usize, largest: &str, places: &str, done: &str) -> String {
-    format!(
-        "`{column}`: {n} samples jump away from their neighbours and straight back (by up to {largest}, more than 2 % of the top speed and ten times the log's own scatter): glitches of the probe, not of the rotor ({places}{}); {done}",
-        if n > 10 { ", …" } else { "" },
+    let found = crate::glitch::find(&v);
+    (
+        found.rows.into_iter().map(|k| k as usize).collect(),
+        found.largest,
     )
 }
 
-/// Finds velocity glitches ([`velocity_spikes`], floor 2 % of the top speed) in `rows` (from the
+/// Finds velocity glitches ([`crate::glitch`]) in `rows` (from the
 /// log's `lines`), warns about them, and when `remove` sets their velocity to NaN (so neither
 /// they nor the accelerations next to them are used; nothing is interpolated).
 pub(crate) fn despike(
@@ -296,7 +239,7 @@ pub(crate) fn despike(
         .take(10)
         .map(|&k| lines[k].to_string())
         .collect();
-    warnings.push(glitch_sentence(
+    warnings.push(crate::glitch::sentence(
         speed_name,
         spikes.len(),
         &format!("{:.0} rpm", largest * 60.0 / std::f64::consts::TAU),
@@ -328,7 +271,7 @@ pub fn tsv_glitches(name: &str, rows: &mut Vec<Row>, remove: bool) -> Option<Str
         .map(|&k| format!("{:.4}", rows[k].sample.t))
         .collect();
     let sentence = format!("{name}: ")
-        + &glitch_sentence(
+        + &crate::glitch::sentence(
             "velocity",
             spikes.len(),
             &format!("{largest:.4e} in the column's unit"),
