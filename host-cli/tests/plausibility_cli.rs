@@ -163,7 +163,8 @@ fn max_effects_zero_is_refused_naming_the_flag() {
 }
 
 /// Speed glitches (an optical probe's missed mark: one sample 30 % off, then back) in a TSV are
-/// announced by diagnose with the rows' times, kept unless `--despike` leaves them out.
+/// announced by diagnose with the rows' times, kept unless `--despike` leaves them out, and by
+/// fit with their lines.
 #[test]
 fn velocity_glitches_are_announced_and_left_out_only_when_asked() {
     let dir = tempfile::tempdir().unwrap();
@@ -207,4 +208,20 @@ fn velocity_glitches_are_announced_and_left_out_only_when_asked() {
         dropped["result"]["rows_dropped"].as_u64().unwrap(),
         kept["result"]["rows_dropped"].as_u64().unwrap() + 3
     );
+    // fit, which keeps no rows, finds the same three and names their lines (header = line 1).
+    let out = propid(&["fit", path.to_str().unwrap()], None);
+    let (_, err) = text(&out);
+    assert!(out.status.success(), "{err}");
+    let lines: Vec<String> = at.iter().map(|k| (k + 2).to_string()).collect();
+    assert!(
+        err.contains("3 samples jump away")
+            && err.contains(&format!("(lines {})", lines.join(", "))),
+        "{err}"
+    );
+    assert!(
+        err.contains("`propid diagnose --despike` leaves those rows out"),
+        "{err}"
+    );
+    let (_, clean_err) = text(&propid(&["fit", clean.to_str().unwrap()], None));
+    assert!(!clean_err.contains("jump away"), "{clean_err}");
 }
