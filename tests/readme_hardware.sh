@@ -56,6 +56,13 @@ while IFS= read -r line; do
         grep -q "mns.pub_interval_min is 0.05" "$work/out"
         grep -q "mns.local_timestamp is false" "$work/out"
     fi
+    if [[ $line == "propid drive "*--fit* ]]; then
+        # drive --fit ends with the recording's Result, after the stop.
+        grep -q "the recording's Result" "$work/out" && grep -q "^   J    = " "$work/out" || {
+            echo "readme_hardware: \`$line\` printed no Result" >&2
+            exit 1
+        }
+    fi
     if [ "$status" -ne "$want" ]; then
         echo "readme_hardware: \`$line\` exited $status, expected $want" >&2
         exit 1

@@ -161,3 +161,67 @@ fn max_effects_zero_is_refused_naming_the_flag() {
         "{err}"
     );
 }
+
+/// Speed glitches (an optical probe's missed mark: one sample 30 % off, then back) in a TSV are
+/// announced by diagnose with the rows' times, kept unless `--despike` leaves them out, and by
+/// fit with their lines.
+#[test]
+fn velocity_glitches_are_announced_and_left_out_only_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let (header, rows) = simulated(dir.path());
+    let clean = write(dir.path(), "clean.tsv", &header, &rows);
+    let json = |path: &Path, extra: &[&str]| {
+        let out = propid(
+            &[
+                &["diagnose", path.to_str().unwrap(), "--format", "json"][..],
+                extra,
+            ]
+            .concat(),
+            None,
+        );
+        assert!(out.status.success(), "{}", text(&out).1);
+        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+    };
+    let notes = |v: &serde_json::Value| v["notes"].to_string();
+    // None on the clean run.
+    assert!(!notes(&json(&clean, &[])).contains("glitch"));
+    let mut glitched = rows.clone();
+    let at = [1000, 2500, 4000];
+    for &k in &at {
+        glitched[k][3] *= 1.3;
+    }
+    let path = write(dir.path(), "glitched.tsv", &header, &glitched);
+    let kept = json(&path, &[]);
+    let n = notes(&kept);
+    assert!(n.contains("3 samples jump away"), "{n}");
+    for &k in &at {
+        assert!(n.contains(&format!("{:.4}", glitched[k][1])), "{n}");
+    }
+    assert!(n.contains("--despike leaves those rows out"), "{n}");
+    let dropped = json(&path, &["--despike"]);
+    assert!(notes(&dropped).contains("those rows are left out (--despike)"));
+    assert_eq!(
+        dropped["result"]["rows_used"].as_u64().unwrap() + 3,
+        kept["result"]["rows_used"].as_u64().unwrap()
+    );
+    assert_eq!(
+        dropped["result"]["rows_dropped"].as_u64().unwrap(),
+        kept["result"]["rows_dropped"].as_u64().unwrap() + 3
+    );
+    // fit, which keeps no rows, finds the same three and names their lines (header = line 1).
+    let out = propid(&["fit", path.to_str().unwrap()], None);
+    let (_, err) = text(&out);
+    assert!(out.status.success(), "{err}");
+    let lines: Vec<String> = at.iter().map(|k| (k + 2).to_string()).collect();
+    assert!(
+        err.contains("3 samples jump away")
+            && err.contains(&format!("(lines {})", lines.join(", "))),
+        "{err}"
+    );
+    assert!(
+        err.contains("`propid diagnose --despike` leaves those rows out"),
+        "{err}"
+    );
+    let (_, clean_err) = text(&propid(&["fit", clean.to_str().unwrap()], None));
+    assert!(!clean_err.contains("jump away"), "{clean_err}");
+}

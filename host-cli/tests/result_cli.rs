@@ -202,3 +202,125 @@ fn the_readmes_result_example_is_what_diagnose_prints() {
         );
     }
 }
+
+/// C_T of a 7-inch propeller, 0.14: T = k·ω² with k = C_T·ρ·D⁴/(2π)².
+const C_T: f64 = 0.14;
+
+fn with_thrust(dir: &Path, scale: f64) -> PathBuf {
+    let tsv = dir.join(format!("thrust-{scale}.tsv"));
+    let k = C_T * 1.225 * 0.1778f64.powi(4) / (4.0 * std::f64::consts::PI.powi(2));
+    propid_ok(&[
+        "sim",
+        "--duration",
+        "30",
+        "--thrust-k",
+        &format!("{:e}", k * scale),
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    tsv
+}
+
+#[test]
+fn the_result_carries_c_t_where_the_file_has_thrust() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = with_thrust(dir.path(), 1.0);
+    let t = tsv.to_str().unwrap();
+    let (json, yaml, text) = result_of(&tsv, &["--diameter", "7in"]);
+    let (mut a, mut b) = (vec![], vec![]);
+    leaves(&json, String::new(), &mut a);
+    leaves(&yaml, String::new(), &mut b);
+    assert_eq!(a, b, "{text}");
+    let c_t = &json["thrust"]["c_t"];
+    let (v, se) = (
+        c_t["value"].as_f64().unwrap(),
+        c_t["stderr"].as_f64().unwrap(),
+    );
+    assert!((v / C_T - 1.0).abs() < 0.01, "C_T {v}");
+    assert!(se > 0.0 && se < 0.01 * v, "{c_t}");
+    assert!((json["thrust"]["exponent"]["value"].as_f64().unwrap() - 2.0).abs() < 0.01);
+    assert!(json["thrust"]["speed_rpm"].as_f64().unwrap() > 1000.0);
+    // fit's Result (on stderr) has it too, from the same identification.
+    let out = propid_ok(&["fit", t, "--diameter", "7in"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains(&format!("C_T  = {v:.4e} ±")), "{err}");
+    assert!(err.contains("(T = C_T·ρ·n²·D⁴) at"), "{err}");
+    // Without a diameter there is no coefficient, and the Result says what to give.
+    for command in ["fit", "diagnose"] {
+        let out = propid_ok(&[command, t]);
+        let all = String::from_utf8_lossy(&out.stderr).to_string()
+            + &String::from_utf8_lossy(&out.stdout);
+        assert!(
+            all.contains("the file has a `thrust` column: give --diameter"),
+            "{command}: {all}"
+        );
+    }
+}
+
+#[test]
+fn thrust_in_gram_force_read_as_newtons_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    // The thrust column 101.97 times too large: grams-force written where newtons belong.
+    let tsv = with_thrust(dir.path(), 1000.0 / 9.80665);
+    let (json, _, _) = result_of(&tsv, &["--diameter", "7in"]);
+    let warnings = json["warnings"].to_string();
+    assert!(warnings.contains("gram-force"), "{warnings}");
+}
+
+#[test]
+fn c_t_of_a_real_log_is_propid_propulsion_s() {
+    // An RCbenchmark export: the thrust cell updates on rows the torque does not, so the
+    // Result's C_T must rest on every row, as `propid propulsion` reads them.
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("rc.tsv");
+    let log = common::repo().join("tests/data/esc_test_alspitz/rcbench/Log_2019-11-07_184325.csv");
+    propid_ok(&[
+        "import",
+        "rcbench",
+        log.to_str().unwrap(),
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    let t = tsv.to_str().unwrap();
+    let p = propid_ok(&["propulsion", t, "--diameter", "7in", "--format", "json"]);
+    let p: serde_json::Value = serde_json::from_slice(&p.stdout).unwrap();
+    let (json, _, _) = result_of(&tsv, &["--diameter", "7in"]);
+    let at = &p["thrust"]["at_reference"];
+    assert_eq!(json["thrust"]["c_t"]["value"], at["value"], "{at}");
+    assert_eq!(json["thrust"]["c_t"]["stderr"], at["stderr"], "{at}");
+    assert_eq!(json["thrust"]["method"], "plateaus");
+    // report.html's Result, the same.
+    let html = dir.path().join("rc.html");
+    propid_ok(&[
+        "report",
+        t,
+        "--diameter",
+        "7in",
+        "-o",
+        html.to_str().unwrap(),
+    ]);
+    let html = std::fs::read_to_string(&html).unwrap();
+    let c_t = json["thrust"]["c_t"]["value"].as_f64().unwrap();
+    assert!(html.contains(&format!("C_T  = {c_t:.4e} ±")), "{c_t}");
+    // And its propulsion section: `propid propulsion`'s text (the plateaus with the efficiency
+    // η of each) and plot; a value the fit does not identify is not in a title.
+    let text =
+        String::from_utf8(propid_ok(&["propulsion", t, "--diameter", "7in"]).stdout).unwrap();
+    let escaped = |s: &str| {
+        s.replace('&', "&amp;")
+            .replace('<', "&lt;")
+            .replace('>', "&gt;")
+    };
+    let c_t_line = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("C_T ="))
+        .unwrap();
+    assert!(html.contains("<h2>Propulsion: thrust, torque, power and the motor</h2>"));
+    assert!(html.contains(&escaped(c_t_line)), "{c_t_line}");
+    assert!(html.contains("η gf/W_e"));
+    assert!(!html.contains("J = 1.0000e3"));
+    let bare = dir.path().join("bare.html");
+    propid_ok(&["report", t, "-o", bare.to_str().unwrap()]);
+    let bare = std::fs::read_to_string(&bare).unwrap();
+    assert!(bare.contains("give <code>--diameter</code>"));
+}

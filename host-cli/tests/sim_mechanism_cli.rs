@@ -100,7 +100,7 @@ fn bad_mechanism_flags_exit_2_naming_the_flag() {
         ),
         (
             vec!["sim", "--current-loop-bandwidth", "100"],
-            "--current-loop-bandwidth only apply to --stand mechanism",
+            "--current-loop-bandwidth applies only to --stand mechanism",
         ),
         (
             vec!["sim", "--stand", "mechanism", "--rate", "0"],
@@ -277,4 +277,56 @@ fn a_lag_the_equation_barely_shows_is_named_by_the_simulation() {
         second["near_misses"].as_array().unwrap().is_empty(),
         "{second:#}"
     );
+}
+
+#[test]
+fn speed_flags_take_rpm() {
+    // 10 rad/s is 95.4930 rpm: the two runs are the same simulation, byte for byte.
+    let dir = tempfile::tempdir().unwrap();
+    let run = |name: &str, flags: &[&str]| {
+        let tsv = dir.path().join(name);
+        let base = [
+            "sim",
+            "--stand",
+            "mechanism",
+            "--duration",
+            "1",
+            "--breakaway",
+            "0.01",
+        ];
+        let out = propid(
+            &[&base[..], flags, &["-o", tsv.to_str().unwrap()]].concat(),
+            None,
+        );
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        std::fs::read(tsv).unwrap()
+    };
+    let rpm = 10.0 * 60.0 / std::f64::consts::TAU;
+    assert_eq!(
+        run(
+            "rad.tsv",
+            &[
+                "--stribeck-speed",
+                "10",
+                "--cq-reference-speed",
+                "1500rad/s"
+            ]
+        ),
+        run(
+            "rpm.tsv",
+            &[
+                "--stribeck-speed",
+                &format!("{rpm}rpm"),
+                "--cq-reference-speed",
+                &format!("{}rpm", 150.0 * rpm)
+            ]
+        )
+    );
+    let out = propid(&["sim", "--noise-velocity", "fast"], None);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("`fast` is not a speed"));
 }

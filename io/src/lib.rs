@@ -23,6 +23,7 @@
 
 pub mod candump;
 pub mod error;
+pub mod glitch;
 pub mod import;
 pub mod input;
 pub mod output;

@@ -21,7 +21,7 @@ from ._results import Diagnosis, FitResult, Plan
 Data = Union[pd.DataFrame, Mapping[str, Any], str, "os.PathLike[str]"]
 
 _REQUIRED = ("t", "force", "velocity", "acceleration")
-_OPTIONAL = ("ts_local", "position")
+_OPTIONAL = ("ts_local", "position", "thrust")
 
 
 def _is_path(data: Any) -> bool:
@@ -94,20 +94,24 @@ def fit(
     return FitResult(json.loads(_propid.fit_columns(*cols.values(), name, bounds)))
 
 
-def diagnose(data: Data, *, max_effects: int = 3) -> Diagnosis:
+def diagnose(data: Data, *, max_effects: int = 3, **options: Any) -> Diagnosis:
     """What the fitted model gets wrong, the named cause, the extended model and the measured
     gain — ``propid diagnose``.
 
-    ``data`` as for :func:`fit`; ``ts_local`` (host receive times) and ``position`` are used
-    when present. Rows with a missing value are skipped (and counted in the notes).
-    ``str(result)`` is the command's text report.
+    ``data`` as for :func:`fit`; ``ts_local`` (host receive times), ``position`` and ``thrust``
+    are used when present. Rows with a missing value are skipped (and counted in the notes).
+    Every option of ``propid diagnose`` is a keyword argument, ``-`` written ``_``, checked as the
+    command checks it: ``diameter="7in"`` (C_Q, and C_T where there is thrust), ``density``,
+    ``temperature`` with ``pressure``, ``flip_torque=True``, ``velocity_unit="rpm"``,
+    ``despike=True``. ``str(result)`` is the command's text report.
 
     Raises :class:`propid.CannotJudge` when the data cannot support a verdict (the diagnosis,
     with its reasons, is the exception's ``diagnosis``), :class:`propid.InputError` for bad
-    input. The work runs without the GIL.
+    input or a bad option. The work runs without the GIL.
     """
+    flags = _flags({"max_effects": max_effects, **options})
     if _is_path(data):
-        report, text, cannot_judge = _propid.diagnose_path(os.fspath(data), max_effects)
+        report, text, cannot_judge = _propid.diagnose_path(os.fspath(data), flags)
     else:
         cols, name = _columns(data, _REQUIRED + _OPTIONAL)
         report, text, cannot_judge = _propid.diagnose_columns(
@@ -117,8 +121,9 @@ def diagnose(data: Data, *, max_effects: int = 3) -> Diagnosis:
             cols["acceleration"],
             cols.get("ts_local"),
             cols.get("position"),
+            cols.get("thrust"),
             name,
-            max_effects,
+            flags,
         )
     result = Diagnosis(json.loads(report), text)
     if cannot_judge is not None:
@@ -137,8 +142,9 @@ def _frame(columns: Dict[str, np.ndarray], source: Optional[str]) -> pd.DataFram
 
 def read_tsv(path: Union[str, "os.PathLike[str]"]) -> pd.DataFrame:
     """Reads a recording (propid's TSV, the seed driver's output) with propid's reader: the
-    columns ``t``, ``force``, ``velocity``, ``acceleration``, and ``ts_local`` and ``position``
-    when the header has them (other columns are ignored, as by ``propid fit``). Empty fields and
+    columns ``t``, ``force``, ``velocity``, ``acceleration``, ``ts_local`` and ``position`` when
+    the header has them, and the stand columns ``thrust`` [N], ``voltage`` [V], ``current`` [A]
+    and ``command`` when it has them (other columns are ignored, as by ``propid fit``). Empty fields and
     ``nan`` are NaN. ``attrs["source"]`` holds the path, so :func:`fit` and :func:`diagnose` of
     the frame name the file in their messages, as they do given the path.
 

@@ -30,8 +30,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use propid_io::import::{Imported, RcbenchOptions};
-use propid_io::tsv::{Row, Sample, TsvReader, HEADER};
-use propid_science::diagnose::{diagnose_rows, read_rows, Options as DiagnoseOptions, Verdict};
+use propid_io::tsv::{Row, Sample, StandColumn, TsvReader, HEADER};
+use propid_science::diagnose::Verdict;
 use propid_science::fit::{fit_columns as fit_in_memory, fit_path_with, Columns, FitOptions};
 
 create_exception!(
@@ -61,6 +61,15 @@ fn py_error(err: &anyhow::Error) -> PyErr {
         2 => InputError::new_err(message),
         _ => PropidError::new_err(message),
     }
+}
+
+/// A usage error of the command line: the first paragraph of clap's message, without its
+/// "error: " (the usage and the --help tip name the command's flags, not the Python function's
+/// arguments).
+fn usage_error(e: clap::Error) -> PyErr {
+    let text = e.render().to_string();
+    let first = text.split("\n\n").next().unwrap_or(&text);
+    InputError::new_err(first.trim_start_matches("error: ").trim().to_string())
 }
 
 fn input_error(e: impl std::fmt::Display) -> PyErr {
@@ -135,30 +144,33 @@ fn fit_columns(
     json(&result.map_err(|e| py_error(&e.into()))?)
 }
 
-/// A diagnosis as `propid diagnose` makes it of `name`: (JSON, the text report, the cannot-judge
-/// message if the data cannot support a verdict).
+/// `propid diagnose`'s arguments: the Python keyword arguments' flags, parsed by the command's
+/// own parser (`file` stands for the data), so every option is checked as the command checks it.
+fn diagnose_args(file: &str, flags: Vec<OsString>) -> PyResult<propid::cmd::diagnose::Args> {
+    use clap::Parser;
+    let argv = [OsString::from("propid"), "diagnose".into(), file.into()]
+        .into_iter()
+        .chain(flags);
+    match propid::cli::Cli::try_parse_from(argv)
+        .map_err(usage_error)?
+        .command
+    {
+        propid::cli::Command::Diagnose(args) => Ok(args),
+        _ => Err(PropidError::new_err("`diagnose` parsed as another command")),
+    }
+}
+
+/// The diagnosis of what was read, as `propid diagnose` makes it: (JSON, text, cannot-judge
+/// message).
 fn diagnose_named(
     py: Python<'_>,
-    rows: Vec<Row>,
-    skipped: usize,
-    max_effects: usize,
+    input: propid::cmd::DiagnosisInput,
+    args: &propid::cmd::diagnose::Args,
     name: &str,
 ) -> PyResult<(String, String, Option<String>)> {
-    let report = py.detach(|| {
-        diagnose_rows(
-            rows,
-            DiagnoseOptions {
-                max_effects,
-                ..DiagnoseOptions::default()
-            },
-        )
-    });
-    let mut report = report.map_err(|e| InputError::new_err(format!("{name}: {e}")))?;
-    if skipped > 0 {
-        report
-            .notes
-            .push(format!("{skipped} rows with missing values were skipped"));
-    }
+    let (report, outcome) = py
+        .detach(|| propid::cmd::diagnose::diagnose_input(input, args, name, &|_| {}))
+        .map_err(|e| py_error(&e))?;
     let cannot_judge = match &report.verdict {
         Verdict::CannotJudge { reasons } => Some(format!(
             "{name}: cannot judge: {}",
@@ -170,32 +182,32 @@ fn diagnose_named(
         )),
         _ => None,
     };
-    // As the command writes it: the report with its Result (rows with missing values dropped).
-    let outcome = propid_science::result::Outcome::from_diagnosis(&report, skipped as u64, None);
     let value = propid::cmd::diagnose::json(&report, outcome.as_ref())
         .map_err(|e| PropidError::new_err(e.to_string()))?;
     let text = propid::cmd::diagnose::text(&report, outcome.as_ref(), name);
     Ok((json(&value)?, text, cannot_judge))
 }
 
-/// `propid diagnose FILE`: (JSON, text, cannot-judge message).
+/// `propid diagnose FILE` with the command's `flags`: (JSON, text, cannot-judge message).
 #[pyfunction]
-#[pyo3(signature = (path, max_effects=3))]
+#[pyo3(signature = (path, flags))]
 fn diagnose_path(
     py: Python<'_>,
     path: PathBuf,
-    max_effects: usize,
+    flags: Vec<OsString>,
 ) -> PyResult<(String, String, Option<String>)> {
-    let (rows, skipped) = py
-        .detach(|| read_rows(&path))
+    let name = path.display().to_string();
+    let args = diagnose_args(&name, flags)?;
+    let input = py
+        .detach(|| propid::cmd::DiagnosisInput::read(&path, &args.reading.reading(), args.despike))
         .map_err(|e| py_error(&e.into()))?;
-    diagnose_named(py, rows, skipped, max_effects, &path.display().to_string())
+    diagnose_named(py, input, &args, &name)
 }
 
-/// The diagnosis of columns (as a file with them would be diagnosed): (JSON, text, cannot-judge
-/// message).
+/// The diagnosis of columns (as a file with them would be diagnosed) with the command's
+/// `flags`: (JSON, text, cannot-judge message).
 #[pyfunction]
-#[pyo3(signature = (t, force, velocity, acceleration, ts_local, position, name, max_effects=3))]
+#[pyo3(signature = (t, force, velocity, acceleration, ts_local, position, thrust, name, flags))]
 #[allow(clippy::too_many_arguments)]
 fn diagnose_columns(
     py: Python<'_>,
@@ -205,9 +217,11 @@ fn diagnose_columns(
     acceleration: PyReadonlyArray1<'_, f64>,
     ts_local: Option<PyReadonlyArray1<'_, f64>>,
     position: Option<PyReadonlyArray1<'_, f64>>,
+    thrust: Option<PyReadonlyArray1<'_, f64>>,
     name: &str,
-    max_effects: usize,
+    flags: Vec<OsString>,
 ) -> PyResult<(String, String, Option<String>)> {
+    let args = diagnose_args(name, flags)?;
     let (t, force) = (slice(&t, "t")?, slice(&force, "force")?);
     let (velocity, acceleration) = (
         slice(&velocity, "velocity")?,
@@ -221,6 +235,7 @@ fn diagnose_columns(
         .as_ref()
         .map(|a| slice(a, "position"))
         .transpose()?;
+    let thrust = thrust.as_ref().map(|a| slice(a, "thrust")).transpose()?;
     let n = t.len();
     let lengths = [
         ("force", Some(force.len())),
@@ -228,32 +243,52 @@ fn diagnose_columns(
         ("acceleration", Some(acceleration.len())),
         ("ts_local", ts_local.map(<[f64]>::len)),
         ("position", position.map(<[f64]>::len)),
+        ("thrust", thrust.map(<[f64]>::len)),
     ];
     if let Some((column, Some(len))) = lengths.iter().find(|(_, l)| l.is_some_and(|l| l != n)) {
         return Err(InputError::new_err(format!(
             "{name}: column `{column}` has {len} values, `t` has {n}: every column needs one value per row"
         )));
     }
-    // The rows a file with these columns gives `read_rows`: complete ones kept, the rest counted.
-    let (rows, skipped) = py.detach(|| {
+    // The rows a file with these columns gives the command's reader: those it keeps, the rest
+    // counted.
+    let reading = args.reading.reading();
+    let input = py.detach(|| {
         let at = |c: Option<&[f64]>, i: usize| c.map_or(f64::NAN, |c| c[i]);
         let mut rows = Vec::with_capacity(n);
         for i in 0..n {
-            let sample = Sample {
-                t: t[i],
-                force: force[i],
-                velocity: velocity[i],
-                acceleration: acceleration[i],
-                position: at(position, i),
-            };
-            if sample.is_finite() {
-                rows.push(Row::new(at(ts_local, i), sample));
+            let mut row = Row::new(
+                at(ts_local, i),
+                Sample {
+                    t: t[i],
+                    force: force[i],
+                    velocity: velocity[i],
+                    acceleration: acceleration[i],
+                    position: at(position, i),
+                },
+            );
+            row.stand.thrust = at(thrust, i);
+            if propid::cmd::DiagnosisInput::keep(&row) {
+                rows.push(row);
             }
         }
         let skipped = n - rows.len();
-        (rows, skipped)
+        let columns: &[StandColumn] = if thrust.is_some() {
+            &[StandColumn::Thrust]
+        } else {
+            &[]
+        };
+        propid::cmd::DiagnosisInput::from_rows(
+            name,
+            rows,
+            skipped,
+            columns,
+            Vec::new(),
+            &reading,
+            args.despike,
+        )
     });
-    diagnose_named(py, rows, skipped, max_effects, name)
+    diagnose_named(py, input, &args, name)
 }
 
 /// Columns as numpy arrays that own the vectors, in a dict (in `order`).
@@ -290,8 +325,9 @@ fn row_columns(rows: &[Row], keep: [bool; 6]) -> Vec<(String, Vec<f64>)> {
 }
 
 /// `read_tsv(path)`: the standard columns the file has (`t`, `force`, `velocity`,
-/// `acceleration`, and `ts_local` and `position` when its header names them), read by propid's
-/// own reader (its messages name file, line and column).
+/// `acceleration`, and `ts_local` and `position` when its header names them) and the stand
+/// columns it has (`thrust`, `voltage`, `current`, `command`), read by propid's own reader (its
+/// messages name file, line and column).
 #[pyfunction]
 fn read_tsv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>> {
     let columns = py.detach(|| -> Result<_, anyhow::Error> {
@@ -319,11 +355,21 @@ fn read_tsv<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
             true,
             reader.has_position(),
         ];
+        let stand = reader.stand_columns();
         let mut rows = Vec::new();
         while let Some(row) = reader.next_row()? {
             rows.push(row);
         }
-        Ok(row_columns(&rows, keep))
+        let mut columns = row_columns(&rows, keep);
+        // The stand columns the file has (thrust, voltage, current, command), as `propid
+        // propulsion` reads them.
+        for column in stand {
+            columns.push((
+                column.name().into(),
+                rows.iter().map(|r| r.stand.get(column)).collect(),
+            ));
+        }
+        Ok(columns)
     });
     columns_dict(py, columns.map_err(|e| py_error(&e))?)
 }
@@ -384,13 +430,7 @@ fn run_cli(py: Python<'_>, args: Vec<OsString>) -> u8 {
 #[pyfunction]
 fn call_cli(py: Python<'_>, args: Vec<OsString>) -> PyResult<()> {
     use clap::Parser;
-    let cli = propid::cli::Cli::try_parse_from(args).map_err(|e| {
-        // The first paragraph of clap's message, without its "error: " (the usage and the
-        // --help tip name the command's flags, not the Python function's arguments).
-        let text = e.render().to_string();
-        let first = text.split("\n\n").next().unwrap_or(&text);
-        InputError::new_err(first.trim_start_matches("error: ").trim().to_string())
-    })?;
+    let cli = propid::cli::Cli::try_parse_from(args).map_err(usage_error)?;
     py.detach(|| cli.run()).map_err(|e| py_error(&e))
 }
 

@@ -121,3 +121,21 @@ def test_importers_refuse_bad_input(tmp_path):
 def test_a_wrong_type_of_data_is_a_type_error():
     with pytest.raises(TypeError, match="DataFrame, a dict of arrays or a path"):
         propid.fit(42)  # type: ignore[arg-type]
+
+
+def test_a_bad_option_of_diagnose_is_the_command_s_error(small_run):
+    # The options are the command's flags, parsed by its parser: the same words.
+    for flags, options in [
+        (["--diameter", "7"], {"diameter": 7}),
+        (["--max-effects", "0"], {"max_effects": 0}),
+        (["--velocity-unit", "furlongs"], {"velocity_unit": "furlongs"}),
+    ]:
+        status, message = cli_error(["diagnose", str(small_run), *flags])
+        assert status == 2, message
+        for data in (small_run, propid.read_tsv(small_run)):
+            with pytest.raises(propid.InputError) as e:
+                propid.diagnose(data, **options)
+            # The command's message (its first paragraph: clap's usage tip names flags).
+            assert str(e.value) == message.split("\n\n")[0]
+    with pytest.raises(propid.InputError, match="unexpected argument '--no-such-option'"):
+        propid.diagnose(small_run, no_such_option=1)

@@ -49,6 +49,21 @@ def test_importers_give_what_the_command_writes(tmp_path):
             assert f"import: {line}" in stderr
 
 
+def test_read_tsv_keeps_the_stand_columns(tmp_path):
+    # A stand's thrust cell beside the drive's feedback: thrust, voltage, current, command.
+    path = tmp_path / "thrust.tsv"
+    cli(["sim", "--duration", "5", "--thrust-k", "4.3e-6", "--output", str(path)])
+    frame = propid.read_tsv(path)
+    stand = ["thrust", "voltage", "current", "command"]
+    assert list(frame.columns) == ["ts_local", "t", "force", "velocity", "acceleration", "position", *stand]
+    frames_equal(frame, pd.read_table(path)[list(frame.columns)])
+    assert np.isfinite(frame["thrust"]).sum() > 100
+    # The Result's C_T from the frame is the command's from the file.
+    by_frame = propid.diagnose(frame, diameter="7in").to_dict()["result"]["thrust"]
+    by_path = propid.diagnose(path, diameter="7in").to_dict()["result"]["thrust"]
+    assert by_frame == by_path and 0.13 < by_frame["c_t"]["value"] < 0.15
+
+
 def test_simulate_is_propid_sim(tmp_path):
     path = tmp_path / "sim.tsv"
     cli(["sim", "--duration", "5", "--seed", "4", "--torque-lag", "0.01", "--output", str(path)])

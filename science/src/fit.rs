@@ -308,6 +308,53 @@ pub fn fit_path_with(
     )
 }
 
+/// The velocity-glitch test ([`propid_io::glitch`]) over the file: the chunks' first passes
+/// merged in order; the second, over the file again, only when a glitch may be there. The
+/// glitches' rows are their lines.
+fn velocity_glitches(
+    data: &[u8],
+    header_len: usize,
+    layout: &propid_io::tsv::Layout,
+    chunks: &[scan::Chunk],
+) -> Option<propid_io::glitch::Glitches> {
+    let (first, rest) = chunks.split_first()?;
+    let mut scatter = first.glitches.clone();
+    for c in rest {
+        scatter.merge(&c.glitches);
+    }
+    if !scatter.may_have_glitches() {
+        return None;
+    }
+    let limit = scatter.limit();
+    let mut triples = propid_io::glitch::Triples::default();
+    let mut found = propid_io::glitch::Glitches::default();
+    // The velocity: slot 3.
+    scan::lines(data, header_len, data.len(), |line, bytes, _| {
+        if let Ok(Some(v)) = layout.parse_line_converting(bytes, 0b1000) {
+            if let Some(d) = triples.push(line + 1, v[3]) {
+                found.check(&d, limit);
+            }
+        }
+        true
+    });
+    Some(found)
+}
+
+/// What `fit` says of velocity glitches at these lines (none: nothing).
+pub(crate) fn glitch_warning(name: &str, found: &propid_io::glitch::Glitches) -> Option<String> {
+    if found.rows.is_empty() {
+        return None;
+    }
+    let shown: Vec<String> = found.rows.iter().take(10).map(u64::to_string).collect();
+    Some(format!("{name}: ") + &propid_io::glitch::sentence(
+        "velocity",
+        found.rows.len(),
+        &format!("{:.4e} in the column's unit", found.largest),
+        &format!("lines {}", shown.join(", ")),
+        "kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; `propid diagnose --despike` leaves those rows out",
+    ))
+}
+
 /// Fits the TSV in `data` (named `name` in messages). `map` is the mapping `data` comes from, if
 /// any: pages already scanned are released from it.
 fn fit_bytes(
@@ -409,7 +456,10 @@ fn fit_bytes(
     let run_rows: u64 = parts.iter().map(|k| chunks[*k].run_rows).sum();
     let last = run_start + run_rows - 1;
     let first = run_start + (0.1 * (last - run_start) as f64) as u64;
+    let glitches = velocity_glitches(data, header_len, &layout, &chunks)
+        .and_then(|found| glitch_warning(name, &found));
     let notes = |mut report: FitReport| {
+        report.warnings.extend(glitches.clone());
         if cut {
             report
                 .warnings
@@ -890,10 +940,23 @@ pub fn figure(r: &FitReport, samples: &[Sample]) -> Figure {
         .map(|s| (s.force - r.c1 * s.velocity - r.c2 * s.velocity * s.velocity.abs()) / r.mass)
         .collect();
     Figure {
-        title: format!(
-            "propid fit: J = {:.4e} kg·m², c1 = {:.3e}, c2 = {:.4e} (RMS {:.3e} rad/s²)",
-            r.mass, r.c1, r.c2, r.rms
-        ),
+        title: {
+            // A value the data do not identify is not quoted as one (a J on its bound of 1e3).
+            let value = |name: &str, symbol: &str, v: f64, unit: &str| {
+                if r.not_identified.contains(&name) {
+                    format!("{symbol} not identified")
+                } else {
+                    format!("{symbol} = {v:.4e}{unit}")
+                }
+            };
+            format!(
+                "propid fit: {}, {}, {} (RMS {:.3e} rad/s²)",
+                value("mass", "J", r.mass, " kg·m²"),
+                value("c1", "c1", r.c1 + 0.0, ""),
+                value("c2", "c2", r.c2, ""),
+                r.rms
+            )
+        },
         x_label: "t [s]".into(),
         panels: vec![
             Panel {

@@ -1,7 +1,7 @@
 //! The one Result every command that fits ends with (`fit`, `diagnose`, `report`, `demo`).
 //!
-//! J, c2 (c1 when it was free), the named effects, and C_Q with the diameter and density it
-//! was computed with — each with its statistical standard error **and** the spread across the
+//! J, c2 (c1 when it was free), the named effects, C_Q with the diameter and density it
+//! was computed with, and C_T where the file has a thrust column — each with its statistical standard error **and** the spread across the
 //! models the data could not rule out (the diagnosis's ambiguous alternatives) — the rows used
 //! and dropped, the warnings, and the caveat no data can lift: a torque-constant error scales J
 //! and c2 invisibly. [`Outcome`] is serialised by serde for JSON and rendered to YAML from the
@@ -93,6 +93,22 @@ pub struct Air {
     pub density_kg_m3: f64,
 }
 
+/// The thrust coefficient from the file's `thrust` column (the same identification as
+/// `propid propulsion`'s).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Thrust {
+    /// C_T = T/(ρ·n²·D⁵) (n in rev/s) at `speed_rpm`.
+    pub c_t: Value,
+    /// The speed C_T is quoted at [rpm] (the log-mean of the speeds measured).
+    pub speed_rpm: f64,
+    /// The exponent p of T ∝ n^p (2 where C_T does not change with speed).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exponent: Option<Value>,
+    /// How it was measured: means over steady plateaus, or row by row through the load cell's
+    /// lag.
+    pub method: crate::propulsion::Method,
+}
+
 /// Plausible torque coefficients C_Q = Q/(ρ n² D⁵) of propellers and fans (n in rev/s): a
 /// value outside is a unit mistake far more often than a propeller.
 pub const C_Q_RANGE: std::ops::RangeInclusive<f64> = 1e-4..=0.1;
@@ -118,7 +134,10 @@ pub struct Outcome {
     /// The torque coefficient C_Q = 4π²·c2/(ρ·D⁵), when a diameter was given.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub c_q: Option<Value>,
-    /// The diameter and density C_Q used.
+    /// C_T, when the file has a thrust column and a diameter was given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrust: Option<Thrust>,
+    /// The diameter and density C_Q and C_T used.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub air: Option<Air>,
     /// Whether the seed's model explains the data (absent when not tested: `propid fit`).
@@ -149,6 +168,7 @@ impl Outcome {
             c1: c1_free.then(|| Value::new(fit.c1, "N·m·s/rad", fit.c1_stderr, None)),
             effects: Vec::new(),
             c_q: None,
+            thrust: None,
             air: None,
             seed_model_holds: None,
             not_identified: fit.not_identified.iter().map(|s| s.to_string()).collect(),
@@ -211,6 +231,7 @@ impl Outcome {
             c1: None,
             effects,
             c_q: None,
+            thrust: None,
             air: None,
             seed_model_holds: Some(r.verdict == Verdict::NothingWrong),
             not_identified: r
@@ -231,6 +252,78 @@ impl Outcome {
         }
         out.finish(air);
         Some(out)
+    }
+
+    /// Adds C_T from the recording's `thrust` column (a recording without one changes nothing),
+    /// by the identification `propid propulsion` makes (steady plateaus where there are three,
+    /// else row by row through the load cell's lag). Without a diameter, or where C_T cannot be
+    /// judged, a warning says so; a C_T the data do not pin down is listed as not identified; one
+    /// outside what propellers have warns with the unit mistakes that would explain it.
+    pub fn add_thrust(&mut self, rec: &crate::propulsion::Recording) {
+        use crate::propulsion::{self as p, Quantity};
+        if rec.thrust.is_none() {
+            return;
+        }
+        let Some(air) = self.air else {
+            self.warnings.push(
+                "the file has a `thrust` column: give --diameter (7in, 0.1778m) for its C_T".into(),
+            );
+            return;
+        };
+        let identified = p::Air::with_density(air.density_kg_m3, None).and_then(|a| {
+            let options = p::Options {
+                diameter: air.diameter_m,
+                air: a,
+                chord: None,
+                reference_speed: None,
+                plateaus: p::PlateauOptions::default(),
+                method: p::MethodChoice::Auto,
+            };
+            p::identify(rec, &options)
+        });
+        let coefficient = match identified {
+            Ok(r) => r.thrust,
+            Err(why) => {
+                self.warnings.push(format!("no C_T: {why}"));
+                return;
+            }
+        };
+        let Some(c) = coefficient else { return };
+        let value = |q: &Quantity| match q {
+            Quantity::Identified { value, stderr, .. } => Some(Value {
+                value: *value,
+                unit: "1",
+                stderr: Some(*stderr),
+                model_spread: None,
+            }),
+            Quantity::NotIdentified { value, .. } => Some(Value {
+                value: *value,
+                unit: "1",
+                stderr: None,
+                model_spread: None,
+            }),
+            Quantity::CannotJudge { .. } => None,
+        };
+        let Some(c_t) = value(&c.at_reference) else {
+            if let Quantity::CannotJudge { reason, .. } = &c.at_reference {
+                self.warnings.push(format!("no C_T: {reason}"));
+            }
+            return;
+        };
+        if let Quantity::NotIdentified { reason, .. } = &c.at_reference {
+            self.not_identified.push("C_T".into());
+            self.warnings
+                .push(format!("C_T is not identified: {reason}"));
+        }
+        if let Some(w) = p::plausibility(p::Kind::Thrust, c_t.value, air.diameter_m) {
+            self.warnings.push(w);
+        }
+        self.thrust = Some(Thrust {
+            c_t,
+            speed_rpm: c.reference_speed * 60.0,
+            exponent: value(&c.exponent).map(|e| Value { unit: "1", ..e }),
+            method: c.method,
+        });
     }
 
     /// C_Q and its range check; every parameter without a standard error listed.
@@ -265,8 +358,14 @@ impl Outcome {
     /// The Result as text for a person.
     pub fn to_text(&self) -> String {
         let v = |name: &str, x: &Value| {
-            let unit = if x.unit == "1" { "" } else { x.unit };
-            let mut s = format!("   {name:<4} = {:.4e} {unit}", x.value);
+            if !x.value.is_finite() {
+                // JSON and YAML carry it as null.
+                return format!("   {name:<4} = – [{}] (these data give no value)\n", x.unit);
+            }
+            let mut s = format!("   {name:<4} = {:.4e}", x.value);
+            if x.unit != "1" {
+                s += &format!(" {}", x.unit);
+            }
             match x.stderr {
                 Some(se) => s += &format!(" ± {se:.2e} (statistical)"),
                 None => s += " (not identified by these data)",
@@ -312,6 +411,21 @@ impl Outcome {
                 air.diameter_m,
                 air.diameter_m / 0.0254,
                 air.density_kg_m3
+            );
+        }
+        if let Some(t) = &self.thrust {
+            s += &v("C_T", &t.c_t);
+            s += &format!(
+                "        (T = C_T·ρ·n²·D⁴) at {:.0} rpm, from {}{}\n",
+                t.speed_rpm,
+                match t.method {
+                    crate::propulsion::Method::Plateaus => "steady plateaus",
+                    crate::propulsion::Method::Dynamic => "every load-cell reading through its lag",
+                },
+                match &t.exponent {
+                    Some(p) => format!("; thrust ∝ n^{:.2}", p.value),
+                    None => String::new(),
+                }
             );
         }
         match self.seed_model_holds {

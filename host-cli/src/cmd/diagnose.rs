@@ -44,6 +44,11 @@ pub struct Args {
     /// How the columns are read.
     #[command(flatten)]
     pub reading: super::ReadingArgs,
+    /// Leave out the rows whose velocity is a glitch (a sample that jumps away from both
+    /// neighbours and straight back, as an optical probe's missed mark does); without it they are
+    /// announced and kept.
+    #[arg(long)]
+    pub despike: bool,
     /// The propeller and air, for C_Q.
     #[command(flatten)]
     pub propeller: super::PropellerArgs,
@@ -74,7 +79,8 @@ fn return_large_buffers_to_the_system() {
 
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
-    let air = args.propeller.air()?;
+    // Flags first: a bad diameter is reported before any input is read.
+    args.propeller.air()?;
     return_large_buffers_to_the_system();
     // Progress on stderr (drawn only when it is a terminal): reading and each selection round
     // take seconds on an hour-long log.
@@ -85,8 +91,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     );
     bar.enable_steady_tick(std::time::Duration::from_millis(200));
     bar.set_message(format!("reading {}", args.file.display()));
-    let table = propid_io::tsv::read_rows(&args.file, |row| row.sample.is_finite())?;
-    let (notes, skipped, rows) = (table.notes(), table.skipped, table.rows);
+    let input = super::DiagnosisInput::read(&args.file, &args.reading.reading(), args.despike)?;
     let max_effects = args.max_effects;
     let progress = |stage: Stage| {
         bar.set_message(match stage {
@@ -97,22 +102,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             Stage::Extended => "extended model".to_string(),
         })
     };
-    let report = diagnose_rows_observed(
-        rows,
-        Options {
-            max_effects,
-            reading: args.reading.reading(),
-        },
+    let diagnosed = diagnose_input(
+        input,
+        &args,
+        &propid_io::error::display_name(&args.file),
         &progress,
     );
     bar.finish_and_clear();
-    let mut report = report.map_err(|e| e.in_file(propid_io::error::display_name(&args.file)))?;
-    if skipped > 0 {
-        report
-            .notes
-            .push(format!("{skipped} rows with missing values were skipped"));
-    }
-    report.notes.extend(notes);
+    let (report, outcome) = diagnosed?;
     let cannot_judge = match &report.verdict {
         Verdict::CannotJudge { reasons } => Some(
             reasons
@@ -127,7 +124,6 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
     }
-    let outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
     let text = match (args.format, &outcome) {
         (Format::Text, _) => text(&report, outcome.as_ref(), &args.file.display().to_string()),
         (Format::Json, _) => {
@@ -144,6 +140,43 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
         None => Ok(()),
     }
+}
+
+/// The diagnosis of what was read (`name` in messages), as `args` ask for it, with its Result:
+/// what `propid diagnose` prints and the Python package's `diagnose` returns. What C_T's
+/// identification says joins the report's notes.
+pub fn diagnose_input(
+    input: super::DiagnosisInput,
+    args: &Args,
+    name: &str,
+    progress: &(dyn Fn(Stage) + Sync),
+) -> anyhow::Result<(propid_science::diagnose::Report, Option<Outcome>)> {
+    let air = args.propeller.air()?;
+    let super::DiagnosisInput {
+        rows,
+        skipped,
+        notes,
+        thrust,
+    } = input;
+    let options = Options {
+        max_effects: args.max_effects,
+        reading: args.reading.reading(),
+    };
+    let mut report =
+        diagnose_rows_observed(rows, options, progress).map_err(|e| e.in_file(name))?;
+    if skipped > 0 {
+        report
+            .notes
+            .push(format!("{skipped} rows with missing values were skipped"));
+    }
+    report.notes.extend(notes);
+    let mut outcome = Outcome::from_diagnosis(&report, skipped as u64, air);
+    if let (Some(o), Some(rec)) = (outcome.as_mut(), &thrust) {
+        let before = o.warnings.len();
+        o.add_thrust(rec);
+        report.notes.extend(o.warnings[before..].iter().cloned());
+    }
+    Ok((report, outcome))
 }
 
 /// The diagnosis as `--format json` writes it: the report, with its Result under `result` (the

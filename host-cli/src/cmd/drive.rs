@@ -206,7 +206,8 @@ command_args! {
         /// Pattern after the init phase (the seed: sine).
         #[arg(long, default_value_t = Pattern::Sine)]
         pub pattern: Pattern,
-        /// Print the running estimate of J, c1, c2 on stderr while driving.
+        /// Print the running estimate of J, c1, c2 on stderr while driving and, once the motor
+        /// is at rest, the recording's Result (`propid diagnose`'s).
         #[arg(long)]
         pub fit: bool,
         /// Write the TSV here instead of standard output.
@@ -498,12 +499,28 @@ fn progress_line(p: &Progress, excitation: &Excitation) -> String {
         );
     }
     if let Some(e) = p.estimate {
-        line += &format!(
-            ", J = {:.4e} ± {:.1e}, c2 = {:.4e} ± {:.1e}",
-            e.j, e.j_stderr, e.c2, e.c2_stderr
-        );
+        line += &format!(", {}", estimate_words(&e));
     }
     line
+}
+
+/// J and c2 of the running estimate with their standard errors, or "not identified yet" while
+/// the data do not pin them down (a value on its bound has a standard error of 0, which would
+/// read as perfect precision).
+fn estimate_words(e: &propid_drive_proto::drive::Estimate) -> String {
+    let one = |name: &str, value: f64, stderr: f64| {
+        let limit = propid_science::plausibility::MAX_RELATIVE_STDERR * value.abs();
+        if stderr > 0.0 && stderr <= limit {
+            format!("{name} = {value:.4e} ± {stderr:.1e}")
+        } else {
+            format!("{name} not identified yet")
+        }
+    };
+    format!(
+        "{}, {}",
+        one("J", e.j, e.j_stderr),
+        one("c2", e.c2, e.c2_stderr)
+    )
 }
 
 /// A register written over the bus: kept in the register file (if one is used) for the next
@@ -595,11 +612,27 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     let mut served = s.served(&cfg);
     let stop = Arc::new(AtomicBool::new(false));
     let _handlers = crate::signals::install(&stop)?;
-    let mut out: Box<dyn Write> = match &s.output {
-        Some(p) => Box::new(
+    // With --fit the recording is diagnosed at the end: on standard output, a copy of the rows
+    // goes to a temporary file for it.
+    let copy = match (&s.output, s.fit) {
+        (None, true) => Some(
+            tempfile::NamedTempFile::new()
+                .context("cannot create a temporary file for --fit's copy of the rows")?,
+        ),
+        _ => None,
+    };
+    let mut out: Box<dyn Write> = match (&s.output, &copy) {
+        (Some(p), _) => Box::new(
             std::fs::File::create(p).with_context(|| format!("cannot create {}", p.display()))?,
         ),
-        None => Box::new(std::io::stdout()),
+        (None, Some(c)) => Box::new(Tee(
+            std::io::stdout(),
+            std::io::BufWriter::new(
+                c.reopen()
+                    .context("cannot write --fit's copy of the rows")?,
+            ),
+        )),
+        (None, None) => Box::new(std::io::stdout()),
     };
     let excitation = *s.played.excitation();
     let readiness = cfg.readiness_id.is_some();
@@ -657,10 +690,15 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     eprintln!("drive: {}", feedback_line(r));
     eprintln!("drive: {}", priority_line(&outcome.link.priority));
     if let Some(e) = r.estimate.filter(|_| s.fit) {
-        eprintln!(
-            "drive: running estimate J = {:.6e} ± {:.1e}, c1 = {:.3e}, c2 = {:.6e} ± {:.1e}",
-            e.j, e.j_stderr, e.c1, e.c2, e.c2_stderr
-        );
+        eprintln!("drive: running estimate {}", estimate_words(&e));
+    }
+    drop(out);
+    if s.fit {
+        // The motor is at rest (STANDBY and zero were sent above): the recording's Result, as
+        // `propid diagnose` gives it.
+        if let Some(path) = s.output.as_deref().or(copy.as_ref().map(|c| c.path())) {
+            eprint!("{}", result_of_recording(path));
+        }
     }
     match &r.reason {
         StopReason::Completed | StopReason::Precise { .. }
@@ -730,5 +768,56 @@ pub fn priority_line(p: &propid_transport::priority::ThreadPriority) -> String {
         format!(
             "the control loop ran at {p}; on a busy machine it can wait for a CPU long enough to lose feedback (docs/TRANSPORTS.md); on Linux `sudo setcap cap_sys_nice+ep \"$(command -v propid)\"` lets it take a real-time priority"
         )
+    }
+}
+
+/// Writes to both.
+struct Tee<A, B>(A, B);
+
+impl<A: Write, B: Write> Write for Tee<A, B> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write_all(buf)?;
+        self.1.write_all(buf)?;
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush()?;
+        self.1.flush()
+    }
+}
+
+/// The Result of a recorded run (`drive --fit`'s last words): the diagnosis's, or why there is
+/// none. Never fails the command: the run itself is what its exit status reports.
+fn result_of_recording(path: &std::path::Path) -> String {
+    let reading = propid_science::plausibility::Reading::default();
+    let input = match super::DiagnosisInput::read(path, &reading, false) {
+        Ok(input) => input,
+        Err(e) => return format!("drive: no Result: {e}\n"),
+    };
+    let samples: Vec<_> = input.rows.iter().map(|row| row.sample).collect();
+    let report = match propid_science::diagnose::diagnose(
+        &samples,
+        propid_science::diagnose::Options::default(),
+    ) {
+        Ok(report) => report,
+        Err(e) => return format!("drive: no Result: {e}\n"),
+    };
+    match propid_science::result::Outcome::from_diagnosis(&report, input.skipped as u64, None) {
+        Some(o) => format!(
+            "drive: the recording's Result (`propid diagnose` on the rows written; `--diameter` there adds C_Q):\n{}",
+            o.to_text()
+        ),
+        None => format!(
+            "drive: no Result: {}\n",
+            match &report.verdict {
+                propid_science::diagnose::Verdict::CannotJudge { reasons } => reasons
+                    .iter()
+                    .map(|w| w.to_string())
+                    .collect::<Vec<_>>()
+                    .join("; "),
+                _ => "the diagnosis could not judge".into(),
+            }
+        ),
     }
 }

@@ -82,6 +82,26 @@ fn progress_bar() -> indicatif::ProgressBar {
     bar
 }
 
+/// The file's time, speed and thrust when it has a `thrust` column (read again: the fit itself
+/// keeps no rows), for the Result's C_T.
+fn thrust(
+    path: &Path,
+    reading: &propid_science::plausibility::Reading,
+) -> Result<Option<propid_science::propulsion::Recording>, propid_io::InputError> {
+    let input = propid_io::input::open(path)?;
+    let name = input.name().to_owned();
+    let header = propid_io::tsv::TsvReader::new(input, name)?;
+    if !header.has(propid_io::tsv::StandColumn::Thrust) {
+        return Ok(None);
+    }
+    let table = propid_io::tsv::read_rows(path, |_| true)?;
+    Ok(propid_science::propulsion::read::thrust_of_rows(
+        &table.rows,
+        &table.stand_columns,
+        reading,
+    ))
+}
+
 /// Runs `propid fit`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Flags first: a bad bound or geometry is reported before any input is read.
@@ -112,7 +132,10 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         eprintln!("plot written to {}", plot.display());
     }
     // The Result, for a person, after the warnings; standard output keeps the seed's keys.
-    let outcome = Outcome::from_fit(&report, options.c1_max > 0.0, args.propeller.air()?);
+    let mut outcome = Outcome::from_fit(&report, options.c1_max > 0.0, args.propeller.air()?);
+    if let Some(rec) = thrust(path, &options.reading).map_err(|e| input.rename(e))? {
+        outcome.add_thrust(&rec);
+    }
     for w in outcome
         .warnings
         .iter()

@@ -40,7 +40,7 @@ impl ReadingArgs {
 }
 
 /// Air density when none is given [kg/m³].
-pub const DENSITY: f64 = 1.225;
+pub const DENSITY: f64 = propid_science::propulsion::air::ISA_DENSITY;
 
 /// The propeller and the air, for C_Q (`fit`, `diagnose`, `report`).
 #[derive(clap::Args, Debug)]
@@ -80,4 +80,79 @@ impl PropellerArgs {
             density_kg_m3: density,
         }))
     }
+}
+
+/// What `diagnose` and `report` read: the rows the diagnosis uses (every value of the sample
+/// finite), and the recording a Result's C_T rests on where the file has a thrust column.
+pub struct DiagnosisInput {
+    /// Rows with t, force, velocity and acceleration all finite.
+    pub rows: Vec<propid_io::tsv::Row>,
+    /// Rows read but left out (a missing value).
+    pub skipped: usize,
+    /// What the reader noticed (a cut last line, repeated times).
+    pub notes: Vec<String>,
+    /// Time, speed and thrust ([`propid_science::propulsion::read::thrust_of_rows`]).
+    pub thrust: Option<propid_science::propulsion::Recording>,
+}
+
+impl DiagnosisInput {
+    /// Reads `path`. A stand's thrust cell updates on rows of its own (the torque's are others):
+    /// rows with a stand measurement are read for C_T, which then rests on the rows
+    /// `propid propulsion` reads, and left out of the diagnosis like any row with a missing
+    /// value.
+    ///
+    /// Velocity glitches (a sample that jumps away from both neighbours and straight back) are
+    /// announced in the notes, and left out when `despike`.
+    pub fn read(
+        path: &std::path::Path,
+        reading: &propid_science::plausibility::Reading,
+        despike: bool,
+    ) -> Result<DiagnosisInput, propid_io::InputError> {
+        let table = propid_io::tsv::read_rows(path, DiagnosisInput::keep)?;
+        let notes = table.notes();
+        Ok(DiagnosisInput::from_rows(
+            &table.name,
+            table.rows,
+            table.skipped,
+            &table.stand_columns,
+            notes,
+            reading,
+            despike,
+        ))
+    }
+
+    /// The rows [`DiagnosisInput::read`] keeps of a file: those with a complete sample, or a
+    /// stand measurement.
+    pub fn keep(row: &propid_io::tsv::Row) -> bool {
+        row.sample.is_finite() || row.stand != propid_io::tsv::Stand::NONE
+    }
+
+    /// [`DiagnosisInput::read`] of rows already read (those [`DiagnosisInput::keep`] keeps, of
+    /// a file `name` with the stand columns `columns`; `skipped` others; `notes` the reader's).
+    pub fn from_rows(
+        name: &str,
+        mut rows: Vec<propid_io::tsv::Row>,
+        skipped: usize,
+        columns: &[propid_io::tsv::StandColumn],
+        mut notes: Vec<String>,
+        reading: &propid_science::plausibility::Reading,
+        despike: bool,
+    ) -> DiagnosisInput {
+        let thrust = propid_science::propulsion::read::thrust_of_rows(&rows, columns, reading);
+        let read = rows.len();
+        rows.retain(|row| row.sample.is_finite());
+        notes.extend(propid_io::import::tsv_glitches(name, &mut rows, despike));
+        DiagnosisInput {
+            skipped: skipped + read - rows.len(),
+            rows,
+            notes,
+            thrust,
+        }
+    }
+}
+
+/// A speed flag's value: rad/s, or rpm with `rpm` (`12000rpm`), as every speed flag takes it.
+pub fn speed(text: &str) -> Result<f64, String> {
+    propid_drive_proto::settings::parse_speed(text)
+        .ok_or_else(|| format!("`{text}` is not a speed: give rad/s (1256.6) or rpm (12000rpm)"))
 }

@@ -31,7 +31,7 @@ command_args! {
         #[arg(long)]
         pub max_torque: f64,
         /// Largest speed the stand may reach: rad/s, or rpm (`12000rpm`), as `drive --max-speed`.
-        #[arg(long, value_name = "SPEED", value_parser = speed)]
+        #[arg(long, value_name = "SPEED", value_parser = super::speed)]
         pub max_speed: Option<f64>,
         /// Longest pattern [s] (the seed's pattern_duration).
         #[arg(long, default_value_t = 200.0)]
@@ -165,10 +165,4 @@ pub fn run(mut args: Args) -> anyhow::Result<()> {
         .with_context(|| format!("cannot write {}", args.output.display()))?;
     eprintln!("plan: written to {}", args.output.display());
     Ok(())
-}
-
-/// A speed: rad/s, or rpm with `rpm`.
-fn speed(text: &str) -> Result<f64, String> {
-    propid_drive_proto::settings::parse_speed(text)
-        .ok_or_else(|| format!("`{text}` is not a speed: give rad/s (1256.6) or rpm (12000rpm)"))
 }

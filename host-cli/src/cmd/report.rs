@@ -15,7 +15,6 @@ use std::io::Write;
 
 use propid_io::input::Mappable;
 use propid_io::output::AtomicOutput;
-use propid_io::tsv::read_rows;
 use propid_science::diagnose::{diagnose, report_figure, to_text, Options};
 use propid_science::fit::{figure, fit_path, FitError, FitOptions, FitReport};
 use propid_science::result::{Air, Outcome};
@@ -92,6 +91,54 @@ fn fit_rows(fit: &FitReport, options: &FitOptions) -> Vec<Vec<String>> {
     rows
 }
 
+/// Where the file has a stand's columns (thrust, voltage, current): what `propid propulsion`
+/// says of it — C_T and C_Q over speed, the figure of merit, thrust per watt, the motor's
+/// constants and its efficiency map — and its plot; without a diameter, what to give.
+fn propulsion_sections(
+    tsv: &Path,
+    name: &str,
+    options: &FitOptions,
+) -> anyhow::Result<Vec<String>> {
+    use propid_science::propulsion::{self as p, read};
+    let (rec, _) = read::read_path(tsv, &read::ReadOptions::default())?;
+    if rec.thrust.is_none() && rec.voltage.is_none() && rec.current.is_none() {
+        return Ok(Vec::new());
+    }
+    let head = "<section><h2>Propulsion: thrust, torque, power and the motor</h2>\n";
+    let Some(diameter) = options.diameter else {
+        return Ok(vec![format!(
+            "{head}<p>The file has a stand's columns (thrust, voltage or current): give <code>--diameter</code> (7in, 0.1778m) for C_T and C_Q over speed, the figure of merit, thrust per watt and the motor's efficiency map (<code>propid propulsion</code>).</p></section>\n"
+        )]);
+    };
+    let identified = p::Air::with_density(options.density, None).and_then(|air| {
+        p::identify(
+            &rec,
+            &p::Options {
+                diameter,
+                air,
+                chord: None,
+                reference_speed: None,
+                plateaus: p::PlateauOptions::default(),
+                method: p::MethodChoice::Auto,
+            },
+        )
+    });
+    Ok(match identified {
+        Ok(result) => vec![
+            format!(
+                "{head}<p>As <code>propid propulsion {} --diameter {diameter:.4}m</code> gives it (with <code>--pole-pairs</code> for an electrical speed, <code>--command-is-duty</code> for an ESC's duty).</p>\n<pre>{}</pre></section>\n",
+                html::escape(name),
+                html::escape(&p::text::propulsion_text(&result, name))
+            ),
+            html::figure_section(&p::figure::figure(&result, Some(&rec)), "propulsion"),
+        ],
+        Err(why) => vec![format!(
+            "{head}<p class=\"verdict\">cannot judge: {}</p></section>\n",
+            html::escape(&why)
+        )],
+    })
+}
+
 /// Builds the report page for a recording. `reproduce` lists the commands that made the
 /// recording (shown before the commands that make the report).
 pub fn build(tsv: &Path, fit_options: &FitOptions, reproduce: &[String]) -> anyhow::Result<String> {
@@ -122,10 +169,14 @@ fn build_from(
     sections.push(s);
     sections.push(html::figure_section(&figure(&fit, &fit_samples), "fit"));
 
-    let table = read_rows(tsv, |row| row.sample.is_finite()).map_err(|e| input.rename(e))?;
-    let skipped = table.skipped;
-    let notes = table.notes();
-    let samples: Vec<_> = table.rows.into_iter().map(|row| row.sample).collect();
+    let super::DiagnosisInput {
+        rows,
+        skipped,
+        notes,
+        thrust,
+    } = super::DiagnosisInput::read(tsv, &fit_options.reading, false)
+        .map_err(|e| input.rename(e))?;
+    let samples: Vec<_> = rows.into_iter().map(|row| row.sample).collect();
     let options = Options {
         reading: fit_options.reading,
         ..Options::default()
@@ -161,6 +212,11 @@ fn build_from(
             html::escape(&e.to_string())
         )),
     }
+    if let Some(rec) = &thrust {
+        outcome.add_thrust(rec);
+    }
+
+    sections.extend(propulsion_sections(tsv, &name, fit_options)?);
 
     // The headline: the Result (the extended model's where the diagnosis could judge).
     let mut head = String::from("<section><h2>Result</h2>\n<pre>");

@@ -70,8 +70,8 @@ pub struct StandArgs {
     /// Torque noise [N·m].
     #[arg(long, default_value_t = StandConfig::default().noise_force)]
     pub noise_force: f64,
-    /// Velocity noise [rad/s].
-    #[arg(long, default_value_t = StandConfig::default().noise_velocity)]
+    /// Velocity noise [rad/s, or rpm with `rpm`].
+    #[arg(long, default_value_t = StandConfig::default().noise_velocity, value_parser = super::speed)]
     pub noise_velocity: f64,
     /// Acceleration noise [rad/s²].
     #[arg(long, default_value_t = StandConfig::default().noise_acceleration)]
@@ -213,14 +213,14 @@ pub struct MechArgs {
     /// Break-away friction of a Stribeck curve [N·m] (0: Coulomb only).
     #[arg(long, default_value_t = 0.0)]
     pub breakaway: f64,
-    /// Stribeck speed [rad/s].
-    #[arg(long, default_value_t = 10.0)]
+    /// Stribeck speed [rad/s, or rpm with `rpm`].
+    #[arg(long, default_value_t = 10.0, value_parser = super::speed)]
     pub stribeck_speed: f64,
     /// Relative change of the torque coefficient per unit of |ω|/ω_ref.
     #[arg(long, default_value_t = 0.0)]
     pub cq_slope: f64,
-    /// ω_ref of --cq-slope [rad/s].
-    #[arg(long, default_value_t = 1500.0)]
+    /// ω_ref of --cq-slope [rad/s, or rpm with `rpm`].
+    #[arg(long, default_value_t = 1500.0, value_parser = super::speed)]
     pub cq_reference_speed: f64,
     /// Peak of an external torque bump (a gust) [N·m] (0: none).
     #[arg(long, default_value_t = 0.0)]
@@ -616,8 +616,13 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         let changed = args.mech.changed();
         if !changed.is_empty() {
             return Err(InputError::invalid(format!(
-                "{} only apply to --stand mechanism",
-                changed.join(", ")
+                "{} {} only to --stand mechanism",
+                changed.join(", "),
+                if changed.len() == 1 {
+                    "applies"
+                } else {
+                    "apply"
+                }
             ))
             .into());
         }

@@ -203,52 +203,6 @@ pub(crate) fn describe_dropped(dropped: &[Dropped], rows: usize) -> Option<Strin
     ))
 }
 
-/// Velocity glitches: samples that jump away from both neighbours and straight back (a
-/// reflective mark missed or seen twice by an optical probe), by more than `floor` and more
-/// than ten times the log's own sample-to-sample scatter. Runs of a held value count as one
-/// sample. Returns the row indices of the glitches and the largest jump.
-pub(crate) fn velocity_spikes(t: &[f64], v: &[f64], floor: f64) -> (Vec<usize>, f64) {
-    // The distinct values in order: (first row, last row of the run, time, value).
-    let mut runs: Vec<(usize, usize, f64, f64)> = Vec::new();
-    for (k, (&tk, &vk)) in t.iter().zip(v).enumerate() {
-        if !vk.is_finite() {
-            continue;
-        }
-        match runs.last_mut() {
-            Some(r) if r.3 == vk => r.1 = k,
-            _ => runs.push((k, k, tk, vk)),
-        }
-    }
-    // Each value's departure from the line through its neighbours, and how far the neighbours
-    // themselves are apart (a real step moves the neighbours too).
-    let departures: Vec<(f64, f64)> = runs
-        .windows(3)
-        .map(|w| {
-            let (a, b, c) = (w[0], w[1], w[2]);
-            let span = c.2 - a.2;
-            let line = if span > 0.0 {
-                a.3 + (c.3 - a.3) * (b.2 - a.2) / span
-            } else {
-                0.5 * (a.3 + c.3)
-            };
-            ((b.3 - line).abs(), (c.3 - a.3).abs())
-        })
-        .collect();
-    let mut scale: Vec<f64> = departures.iter().map(|d| d.0).collect();
-    let scatter = 1.4826 * median(&mut scale).unwrap_or(0.0);
-    let limit = floor.max(10.0 * scatter);
-    let mut spikes = Vec::new();
-    let mut largest = 0.0f64;
-    for (k, &(d, across)) in departures.iter().enumerate() {
-        if d > limit && d > across {
-            let (first, last, ..) = runs[k + 1];
-            spikes.extend(first..=last);
-            largest = largest.max(d);
-        }
-    }
-    (spikes, largest)
-}
-
 /// What to say about `n` rows dropped as copies of the line before them.
 pub(crate) fn duplicates_warning(n: usize, rows: usize) -> String {
     format!(
@@ -256,7 +210,17 @@ pub(crate) fn duplicates_warning(n: usize, rows: usize) -> String {
     )
 }
 
-/// Finds velocity glitches ([`velocity_spikes`], floor 2 % of the top speed) in `rows` (from the
+/// Velocity glitches ([`crate::glitch`]) in `rows`: the rows' indices and the largest jump.
+fn glitches(rows: &[Row]) -> (Vec<usize>, f64) {
+    let v: Vec<f64> = rows.iter().map(|r| r.sample.velocity).collect();
+    let found = crate::glitch::find(&v);
+    (
+        found.rows.into_iter().map(|k| k as usize).collect(),
+        found.largest,
+    )
+}
+
+/// Finds velocity glitches ([`crate::glitch`]) in `rows` (from the
 /// log's `lines`), warns about them, and when `remove` sets their velocity to NaN (so neither
 /// they nor the accelerations next to them are used; nothing is interpolated).
 pub(crate) fn despike(
@@ -266,13 +230,7 @@ pub(crate) fn despike(
     remove: bool,
     warnings: &mut Vec<String>,
 ) {
-    let t: Vec<f64> = rows.iter().map(|r| r.sample.t).collect();
-    let v: Vec<f64> = rows.iter().map(|r| r.sample.velocity).collect();
-    let top = v
-        .iter()
-        .filter(|x| x.is_finite())
-        .fold(0.0f64, |m, x| m.max(x.abs()));
-    let (spikes, largest) = velocity_spikes(&t, &v, 0.02 * top);
+    let (spikes, largest) = glitches(rows);
     if spikes.is_empty() {
         return;
     }
@@ -281,23 +239,59 @@ pub(crate) fn despike(
         .take(10)
         .map(|&k| lines[k].to_string())
         .collect();
-    warnings.push(format!(
-        "`{speed_name}`: {} samples jump away from their neighbours and straight back (by up to {:.0} rpm, more than 2 % of the top speed and ten times the log's own scatter): glitches of the probe, not of the rotor (lines {}{}); {}",
+    warnings.push(crate::glitch::sentence(
+        speed_name,
         spikes.len(),
-        largest * 60.0 / std::f64::consts::TAU,
-        shown.join(", "),
-        if spikes.len() > 10 { ", …" } else { "" },
+        &format!("{:.0} rpm", largest * 60.0 / std::f64::consts::TAU),
+        &format!("lines {}", shown.join(", ")),
         if remove {
             "their velocity is NaN in the TSV (--despike), so neither they nor the accelerations beside them are used"
         } else {
             "kept: each puts a false pair of large accelerations into the data; --despike sets them to NaN"
-        }
+        },
     ));
     if remove {
         for k in spikes {
             rows[k].sample.velocity = f64::NAN;
         }
     }
+}
+
+/// Velocity glitches in the rows of a TSV (`name`): what to tell the user, naming the rows by
+/// their time, and, when `remove`, the rows left without them (a glitch's acceleration column is
+/// the file's own, so the row is dropped whole). `None` when there are none.
+pub fn tsv_glitches(name: &str, rows: &mut Vec<Row>, remove: bool) -> Option<String> {
+    let (spikes, largest) = glitches(rows);
+    if spikes.is_empty() {
+        return None;
+    }
+    let times: Vec<String> = spikes
+        .iter()
+        .take(10)
+        .map(|&k| format!("{:.4}", rows[k].sample.t))
+        .collect();
+    let sentence = format!("{name}: ")
+        + &crate::glitch::sentence(
+            "velocity",
+            spikes.len(),
+            &format!("{largest:.4e} in the column's unit"),
+            &format!("t = {} s", times.join(", ")),
+            if remove {
+                "those rows are left out (--despike)"
+            } else {
+                "kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; --despike leaves those rows out"
+            },
+        );
+    if remove {
+        let mut k = 0;
+        let mut next = spikes.iter().peekable();
+        rows.retain(|_| {
+            let drop = next.next_if_eq(&&k).is_some();
+            k += 1;
+            !drop
+        });
+    }
+    Some(sentence)
 }
 
 /// A column an importer keeps beyond the TSV's known ones (readers ignore it).

@@ -118,7 +118,15 @@ pub fn fit_columns(
         .take(super::GATE_ROWS as usize)
         .map(|i| columns.sample(i))
         .collect();
-    report_of(&estimator, options, window, name, &gate).map_err(FitError::from)
+    let mut report = report_of(&estimator, options, window, name, &gate)?;
+    // The velocity-glitch test the file's fit makes, over every row (lines as the file's).
+    let mut found = propid_io::glitch::find(columns.velocity);
+    found
+        .rows
+        .iter_mut()
+        .for_each(|r| *r = Columns::line(*r as usize));
+    report.warnings.extend(super::glitch_warning(name, &found));
+    Ok(report)
 }
 
 #[cfg(test)]
@@ -191,6 +199,55 @@ mod tests {
         let (file, mem) = both(5, &[], &options);
         assert!(file.contains("usable samples"), "{file}");
         assert_eq!(file, mem);
+    }
+
+    /// A velocity glitch (one sample 50 % off and straight back) is announced with its line by
+    /// the file's fit, in one piece or three, and by the columns' fit alike.
+    #[test]
+    fn velocity_glitches_are_announced_alike() {
+        let (_, mut cols) = recording(3000, &[]);
+        cols[2][1000] *= 1.5;
+        let mut text = String::from("t\tforce\tvelocity\tacceleration\n");
+        let rows = cols[0].iter().zip(&cols[1]).zip(&cols[2]).zip(&cols[3]);
+        for (((t, q), v), a) in rows {
+            text += &format!("{t}\t{q}\t{v}\t{a}\n");
+        }
+        let options = FitOptions::default();
+        let file = |chunks| {
+            fit_bytes(
+                text.as_bytes(),
+                None,
+                "x",
+                &options,
+                false,
+                chunks,
+                &mut |_, _| {},
+            )
+            .unwrap()
+            .0
+        };
+        let mem = fit_columns(&columns(&cols), &options, "x").unwrap();
+        let note = |r: &FitReport| {
+            r.warnings
+                .iter()
+                .find(|w| w.contains("jump away"))
+                .cloned()
+                .unwrap_or_default()
+        };
+        let one = note(&file(1));
+        assert!(
+            one.starts_with("x: `velocity`: 1 samples jump away"),
+            "{one}"
+        );
+        assert!(one.contains("(lines 1002)"), "{one}");
+        assert_eq!(one, note(&file(3)));
+        assert_eq!(one, note(&mem));
+        // Without the glitch: nothing.
+        let (_, clean) = recording(3000, &[]);
+        assert_eq!(
+            note(&fit_columns(&columns(&clean), &options, "x").unwrap()),
+            ""
+        );
     }
 
     #[test]

@@ -150,6 +150,8 @@ pub(super) struct Chunk {
     /// Rows identical, byte for byte, to the row before them (a log written twice), and the
     /// local line of the first.
     pub copies: (u64, Option<u64>),
+    /// The velocity-glitch test's first pass over the chunk's rows (local lines).
+    pub glitches: propid_io::glitch::Scatter,
 }
 
 /// The first of t, force, velocity, acceleration that is not finite, if any.
@@ -242,6 +244,7 @@ pub(super) fn scan(
             c.copies.1.get_or_insert(line);
         }
         previous = bytes;
+        c.glitches.push(line, v[3]);
         if let Some(column) = incomplete(&v) {
             in_run = false;
             c.last_incomplete = Some((line, column));

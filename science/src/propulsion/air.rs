@@ -22,6 +22,9 @@ pub const GAMMA: f64 = 1.4;
 pub const ISA_TEMPERATURE: f64 = 288.15;
 /// ISA sea-level pressure [Pa].
 pub const ISA_PRESSURE: f64 = 101_325.0;
+/// ISA sea-level density [kg/m³], as the standard states it (p/(R·T) with R = 287.05 gives
+/// 1.22503; every propeller table, and every propid command, quotes 1.225).
+pub const ISA_DENSITY: f64 = 1.225;
 
 /// Where the density came from.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -65,7 +68,7 @@ impl Air {
     /// ISA sea level: 15 °C, 101 325 Pa.
     pub fn isa() -> Air {
         Air {
-            density: ISA_PRESSURE / (R_AIR * ISA_TEMPERATURE),
+            density: ISA_DENSITY,
             temperature: ISA_TEMPERATURE,
             viscosity: viscosity(ISA_TEMPERATURE),
             source: AirSource::IsaSeaLevel,

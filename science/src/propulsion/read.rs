@@ -11,7 +11,7 @@
 use std::io::BufRead;
 use std::path::Path;
 
-use propid_io::tsv::{StandColumn, TsvReader};
+use propid_io::tsv::{Row, StandColumn, TsvReader};
 use propid_io::InputError;
 
 use super::Recording;
@@ -45,33 +45,92 @@ pub fn read(
     options: &ReadOptions,
 ) -> Result<(Recording, ReadReport), InputError> {
     let mut reader = TsvReader::new(input, name)?;
-    let has = |c: StandColumn| reader.has(c);
-    let mut rec = Recording::default();
-    let with = |yes: bool| yes.then(Vec::new);
-    rec.torque = Some(Vec::new());
-    rec.thrust = with(has(StandColumn::Thrust));
-    rec.voltage = with(has(StandColumn::Voltage));
-    rec.current = with(has(StandColumn::Current));
-    rec.duty = with(has(StandColumn::Command) && options.command_is_duty);
-    let mut report = ReadReport {
-        columns: reader.stand_columns().iter().map(|c| c.name()).collect(),
-        ..ReadReport::default()
-    };
-    let scale = 1.0 / f64::from(options.pole_pairs.unwrap_or(1).max(1));
+    let mut builder = Builder::new(
+        &reader.stand_columns(),
+        options,
+        ReadReport {
+            columns: reader.stand_columns().iter().map(|c| c.name()).collect(),
+            ..ReadReport::default()
+        },
+    );
     while let Some(row) = reader.next_row()? {
+        builder.push(&row);
+    }
+    Ok(builder.finish())
+}
+
+/// A [`Recording`] of rows already read (`columns`: the stand columns their file has), as
+/// [`read`] makes it.
+pub fn from_rows(rows: &[Row], columns: &[StandColumn], options: &ReadOptions) -> Recording {
+    let mut builder = Builder::new(columns, options, ReadReport::default());
+    for row in rows {
+        builder.push(row);
+    }
+    builder.finish().0
+}
+
+/// The time, speed and thrust of rows already read, for a Result's C_T
+/// ([`crate::result::Outcome::add_thrust`]): `None` when their file has no `thrust` column
+/// (`columns`). The speed is read as `reading` says (`--velocity-unit`).
+pub fn thrust_of_rows(
+    rows: &[Row],
+    columns: &[StandColumn],
+    reading: &crate::plausibility::Reading,
+) -> Option<Recording> {
+    if !columns.contains(&StandColumn::Thrust) {
+        return None;
+    }
+    let mut rec = from_rows(rows, &[StandColumn::Thrust], &ReadOptions::default());
+    rec.torque = None;
+    let (_, speed) = reading.factors();
+    // The acceleration column stays in rad/s² (as the Reading documents).
+    for x in &mut rec.speed {
+        *x *= speed;
+    }
+    rec.thrust.is_some().then_some(rec)
+}
+
+/// A recording made row by row: rows without a time or a speed, or whose time does not
+/// increase, are dropped and counted; a channel with no value at all is absent.
+struct Builder {
+    rec: Recording,
+    report: ReadReport,
+    scale: f64,
+}
+
+impl Builder {
+    fn new(columns: &[StandColumn], options: &ReadOptions, report: ReadReport) -> Builder {
+        let with = |c: StandColumn| columns.contains(&c).then(Vec::new);
+        let rec = Recording {
+            torque: Some(Vec::new()),
+            thrust: with(StandColumn::Thrust),
+            voltage: with(StandColumn::Voltage),
+            current: with(StandColumn::Current),
+            duty: with(StandColumn::Command).filter(|_| options.command_is_duty),
+            ..Recording::default()
+        };
+        Builder {
+            rec,
+            report,
+            scale: 1.0 / f64::from(options.pole_pairs.unwrap_or(1).max(1)),
+        }
+    }
+
+    fn push(&mut self, row: &Row) {
+        let (rec, report) = (&mut self.rec, &mut self.report);
         report.rows += 1;
         let s = row.sample;
         if !(s.t.is_finite() && s.velocity.is_finite()) {
             report.without_speed += 1;
-            continue;
+            return;
         }
         if rec.time.last().is_some_and(|&last| s.t <= last) {
             report.time_not_increasing += 1;
-            continue;
+            return;
         }
         rec.time.push(s.t);
-        rec.speed.push(s.velocity * scale);
-        rec.acceleration.push(s.acceleration * scale);
+        rec.speed.push(s.velocity * self.scale);
+        rec.acceleration.push(s.acceleration * self.scale);
         let push = |v: &mut Option<Vec<f64>>, x: f64| {
             if let Some(v) = v {
                 v.push(x);
@@ -83,19 +142,22 @@ pub fn read(
         push(&mut rec.current, row.stand.current);
         push(&mut rec.duty, row.stand.command);
     }
-    // A column with no value at all is not there.
-    for c in [
-        &mut rec.torque,
-        &mut rec.thrust,
-        &mut rec.voltage,
-        &mut rec.current,
-        &mut rec.duty,
-    ] {
-        if c.as_ref().is_some_and(|v| v.iter().all(|x| !x.is_finite())) {
-            *c = None;
+
+    fn finish(mut self) -> (Recording, ReadReport) {
+        let rec = &mut self.rec;
+        for c in [
+            &mut rec.torque,
+            &mut rec.thrust,
+            &mut rec.voltage,
+            &mut rec.current,
+            &mut rec.duty,
+        ] {
+            if c.as_ref().is_some_and(|v| v.iter().all(|x| !x.is_finite())) {
+                *c = None;
+            }
         }
+        (self.rec, self.report)
     }
-    Ok((rec, report))
 }
 
 /// [`read`] from a path (`-`: standard input).
