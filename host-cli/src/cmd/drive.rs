@@ -697,6 +697,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // The motor is at rest (STANDBY and zero were sent above): the recording's Result, as
         // `propid diagnose` gives it.
         if let Some(path) = s.output.as_deref().or(copy.as_ref().map(|c| c.path())) {
+            eprintln!(
+                "drive: the motor is at rest; diagnosing the recording (seconds on a long run)"
+            );
             eprint!("{}", result_of_recording(path));
         }
     }
