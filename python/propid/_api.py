@@ -66,6 +66,8 @@ def fit(
     c2_max: Optional[float] = None,
     diameter: Optional[float] = None,
     density: Optional[float] = None,
+    flip_torque: bool = False,
+    velocity_unit: Optional[str] = None,
 ) -> FitResult:
     """Fits the seed's model ``J·a = F − c1·ω − c2·ω|ω|`` exactly, with the seed's trimming
     (the last run of complete rows, its first 10 % dropped) and bounds — ``propid fit``.
@@ -75,7 +77,9 @@ def fit(
     all cores). The bounds are the command's flags; ``None`` takes the command's default
     (``mass_min`` 1e-9, ``mass_max`` 1e3, ``c1_max`` 0 — no viscous term, as the seed —,
     ``c2_max`` 1e2). ``diameter`` [m] adds the torque coefficient C_Q at ``density``
-    (default 1.225 kg/m³).
+    (default 1.225 kg/m³). ``flip_torque`` and ``velocity_unit`` (``"rpm"``, ``"rev/s"``,
+    ``"deg/s"``) read the columns as the command's ``--flip-torque`` and ``--velocity-unit`` do
+    (what its plausibility check asks for when the sign or the unit looks wrong).
 
     Raises :class:`propid.InputError` with the command's message when the data cannot give a
     fit. The work runs without the GIL.
@@ -87,6 +91,8 @@ def fit(
         c2_max=c2_max,
         diameter=diameter,
         density=density,
+        flip_torque=flip_torque,
+        velocity_unit=velocity_unit,
     )
     if _is_path(data):
         return FitResult(json.loads(_propid.fit_path(os.fspath(data), bounds)))

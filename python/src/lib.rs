@@ -86,20 +86,33 @@ struct Bounds {
     c2_max: Option<f64>,
     diameter: Option<f64>,
     density: Option<f64>,
+    flip_torque: Option<bool>,
+    velocity_unit: Option<String>,
 }
 
-impl From<Bounds> for FitOptions {
-    fn from(b: Bounds) -> FitOptions {
+impl TryFrom<Bounds> for FitOptions {
+    type Error = PyErr;
+
+    /// The fit's options; a velocity unit the command would refuse is refused in its words.
+    fn try_from(b: Bounds) -> PyResult<FitOptions> {
         let d = FitOptions::default();
-        FitOptions {
+        let velocity_unit = match &b.velocity_unit {
+            Some(u) => propid_science::plausibility::SpeedUnit::parse(u)
+                .map_err(|e| InputError::new_err(format!("velocity_unit: {e}")))?,
+            None => d.reading.velocity_unit,
+        };
+        Ok(FitOptions {
             mass_min: b.mass_min.unwrap_or(d.mass_min),
             mass_max: b.mass_max.unwrap_or(d.mass_max),
             c1_max: b.c1_max.unwrap_or(d.c1_max),
             c2_max: b.c2_max.unwrap_or(d.c2_max),
             diameter: b.diameter,
             density: b.density.unwrap_or(d.density),
-            reading: d.reading,
-        }
+            reading: propid_science::plausibility::Reading {
+                flip_torque: b.flip_torque.unwrap_or(d.reading.flip_torque),
+                velocity_unit,
+            },
+        })
     }
 }
 
@@ -116,7 +129,7 @@ fn slice<'a>(a: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [f64]
 /// `propid fit FILE --format json`: the fit's report as JSON.
 #[pyfunction]
 fn fit_path(py: Python<'_>, path: PathBuf, bounds: Bounds) -> PyResult<String> {
-    let options = FitOptions::from(bounds);
+    let options = FitOptions::try_from(bounds)?;
     let result = py.detach(|| fit_path_with(&path, &options, false, &mut |_, _| {}));
     let (report, _) = result.map_err(|e| py_error(&e.into()))?;
     json(&report)
@@ -133,7 +146,7 @@ fn fit_columns(
     name: &str,
     bounds: Bounds,
 ) -> PyResult<String> {
-    let options = FitOptions::from(bounds);
+    let options = FitOptions::try_from(bounds)?;
     let columns = Columns {
         t: slice(&t, "t")?,
         force: slice(&force, "force")?,
