@@ -25,6 +25,7 @@ from ._api import (
     import_autoquad,
     import_rcbench,
     plan,
+    propulsion,
     read_tsv,
     simulate,
 )
@@ -50,6 +51,7 @@ __all__ = [
     "import_autoquad",
     "import_rcbench",
     "plan",
+    "propulsion",
     "read_tsv",
     "simulate",
 ]

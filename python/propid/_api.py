@@ -226,6 +226,49 @@ def simulate(*, output: Optional[Union[str, "os.PathLike[str]"]] = None, **optio
     return frame
 
 
+def _write_tsv(data: Any, path: str) -> None:
+    """The known columns of a DataFrame or dict of arrays as propid's TSV (floats by ``repr``,
+    which reads back to the same float64; NaN as ``nan``)."""
+    frame = pd.DataFrame(data) if not isinstance(data, pd.DataFrame) else data
+    known = [c for c in ("ts_local", "t", "force", "velocity", "acceleration", "position",
+                         "thrust", "voltage", "current", "command") if c in frame.columns]
+    frame[known].to_csv(path, sep="\t", index=False, na_rep="nan")
+
+
+def propulsion(data: Data, *, diameter: Union[str, float], **options: Any) -> Dict[str, Any]:
+    """C_T and C_Q over speed, thrust per watt, the figure of merit and, where voltage and current
+    are logged, the motor's constants — ``propid propulsion``, run in-process.
+
+    ``data`` as for :func:`diagnose`, with the stand columns ``thrust``, ``voltage``, ``current``,
+    ``command`` where the stand has them (:func:`import_rcbench` gives them); a frame is written
+    to a temporary TSV for the command. ``diameter`` as the command takes it (``"7in"``,
+    ``"178mm"``, or metres). Other options are its flags, ``-`` written ``_``: ``pole_pairs``,
+    ``command_is_duty=True``, ``method="plateaus"``, ``reference_speed="12000rpm"``, ``motor=True``,
+    ``density``. Returns the result file's dict (what ``propid size --propeller`` reads). The
+    command's report goes to standard output.
+
+    Raises :class:`propid.CannotJudge` when a coefficient asked for is not identified (the dict is
+    then the exception's ``result``), :class:`propid.InputError` for bad input or a bad option.
+    """
+    with tempfile.TemporaryDirectory(prefix="propid-") as tmp:
+        out = os.path.join(tmp, "propulsion.json")
+        if _is_path(data):
+            path = os.fspath(data)
+        else:
+            path = os.path.join(tmp, "data.tsv")
+            _write_tsv(data, path)
+        args = ["propid", "propulsion", path, "--diameter", str(diameter), *_flags(options)]
+        try:
+            _propid.call_cli([*args, "--output", out])
+        except _propid.CannotJudge as e:
+            if os.path.exists(out):
+                with open(out) as f:
+                    e.result = json.load(f)
+            raise
+        with open(out) as f:
+            return json.load(f)
+
+
 def plan(
     *,
     max_torque: float,

@@ -1,0 +1,30 @@
+"""propid.propulsion is `propid propulsion` in-process: the same result file, from a path or a
+DataFrame; CannotJudge carries the result when what was asked is not identified."""
+
+import json
+
+import pytest
+
+import propid
+from conftest import cli
+
+
+def test_propulsion_is_the_commands_result(tmp_path):
+    path = tmp_path / "thrust.tsv"
+    # C_T = 0.14 on a 7-inch propeller: k = C_T·ρ·D⁴/(2π)².
+    cli(["sim", "--duration", "30", "--thrust-k", "4.34e-6", "--output", str(path)])
+    out = tmp_path / "cli.json"
+    cli(["propulsion", str(path), "--diameter", "7in", "--output", str(out)])
+    expected = json.loads(out.read_text())
+    assert propid.propulsion(path, diameter="7in") == expected
+    # A frame goes through a TSV whose floats read back to the same values: the same result.
+    assert propid.propulsion(propid.read_tsv(path), diameter="7in") == expected
+    c_t = expected["thrust"]["at_reference"]
+    assert c_t["status"] == "identified" and 0.138 < c_t["value"] < 0.142
+    # The motor asked for on a log without voltage or current: CannotJudge, the result attached.
+    with pytest.raises(propid.CannotJudge, match="the motor") as e:
+        propid.propulsion(path, diameter="7in", motor=True)
+    assert e.value.result["thrust"]["at_reference"] == c_t
+    # 7 read as metres: every coefficient outside what propellers have, so none is judged.
+    with pytest.raises(propid.CannotJudge, match="C_T"):
+        propid.propulsion(path, diameter=7)
