@@ -25,6 +25,6 @@ def test_propulsion_is_the_commands_result(tmp_path):
     with pytest.raises(propid.CannotJudge, match="the motor") as e:
         propid.propulsion(path, diameter="7in", motor=True)
     assert e.value.result["thrust"]["at_reference"] == c_t
-    # 7 read as metres: every coefficient outside what propellers have, so none is judged.
-    with pytest.raises(propid.CannotJudge, match="C_T"):
+    # A bare 7 is refused, as the command refuses it.
+    with pytest.raises(propid.InputError, match="--diameter 7 has no unit"):
         propid.propulsion(path, diameter=7)

@@ -215,8 +215,10 @@ fn unanswered(p: &Propulsion, motor: bool) -> Vec<String> {
 /// Runs `propid propulsion`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let options = args.options()?;
+    // A bare number outside 0.02–3 m is refused, as by fit and diagnose (7 is inches far more
+    // often than a 7 m rotor).
     if let Some(note) = unit_notes("--diameter", &args.diameter, Dimension::Length, 0.02..=3.0) {
-        eprintln!("warning: {note}");
+        return Err(InputError::invalid(note).into());
     }
     if let Some(out) = &args.output {
         if out == &args.file {

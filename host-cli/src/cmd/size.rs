@@ -137,7 +137,7 @@ impl Args {
             (None, Some(ct), Some(cq)) => {
                 let d = self.diameter.ok_or_else(|| InputError::invalid("--c-t and --c-q need --diameter".into()))?;
                 if let Some(note) = unit_notes("--diameter", &d, Dimension::Length, 0.02..=3.0) {
-                    eprintln!("warning: {note}");
+                    return Err(InputError::invalid(note));
                 }
                 for (flag, c, kind) in [("--c-t", ct, Kind::Thrust), ("--c-q", cq, Kind::Torque)] {
                     if !(c > 0.0 && c.is_finite()) {
