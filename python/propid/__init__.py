@@ -26,6 +26,7 @@ from ._api import (
     import_rcbench,
     plan,
     propulsion,
+    size,
     read_tsv,
     simulate,
 )
@@ -52,6 +53,7 @@ __all__ = [
     "import_rcbench",
     "plan",
     "propulsion",
+    "size",
     "read_tsv",
     "simulate",
 ]

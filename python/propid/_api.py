@@ -269,6 +269,33 @@ def propulsion(data: Data, *, diameter: Union[str, float], **options: Any) -> Di
             return json.load(f)
 
 
+def size(*, propeller: Optional[Union[Dict[str, Any], str, "os.PathLike[str]"]] = None, **options: Any) -> Dict[str, Any]:
+    """The drivetrain for a thrust, torque or speed — ``propid size``, run in-process.
+
+    ``propeller`` is a :func:`propulsion` result (its dict) or the path of a result file; or give
+    ``c_t``, ``c_q`` and ``diameter`` instead. Every other option is the command's flag, ``-``
+    written ``_`` (``propid size --help``): ``thrust="6N"``, ``hover_mass="1.6kg"``, ``rotors=4``,
+    ``kv=1750``, ``resistance="60mohm"``, ``no_load_current="0.8A"``, ``voltage="4S"``,
+    ``battery="3000mAh"``. Returns the answer as the command's ``--format json`` gives it. The
+    command's text goes to standard output.
+
+    Raises :class:`propid.InputError` with the command's message for a bad option.
+    """
+    with tempfile.TemporaryDirectory(prefix="propid-") as tmp:
+        out = os.path.join(tmp, "size.json")
+        args = ["propid", "size"]
+        if isinstance(propeller, Mapping):
+            path = os.path.join(tmp, "propeller.json")
+            with open(path, "w") as f:
+                json.dump(propeller, f)
+            args += ["--propeller", path]
+        elif propeller is not None:
+            args += ["--propeller", os.fspath(propeller)]
+        _propid.call_cli([*args, *_flags(options), "--output", out])
+        with open(out) as f:
+            return json.load(f)
+
+
 def plan(
     *,
     max_torque: float,

@@ -28,3 +28,28 @@ def test_propulsion_is_the_commands_result(tmp_path):
     # A bare 7 is refused, as the command refuses it.
     with pytest.raises(propid.InputError, match="--diameter 7 has no unit"):
         propid.propulsion(path, diameter=7)
+
+
+# docs/PROPULSION.md §5's question (the command's worked example).
+WORKED = dict(c_t=0.14, c_q=0.0107, diameter="7in", thrust="6N", rotors=4, kv=1750,
+              resistance="60mohm", no_load_current="0.8A", voltage="4S", battery="3000mAh",
+              usable=0.8, density=1.225)
+
+
+def test_size_is_the_commands_answer(tmp_path):
+    flags = [f"--{k.replace('_', '-')}={v}" for k, v in WORKED.items()]
+    expected = json.loads(cli(["size", *flags, "--format", "json"]).stdout)
+    assert propid.size(**WORKED) == expected
+    # From an identified propeller, its dict or its file alike.
+    path = tmp_path / "thrust.tsv"
+    cli(["sim", "--duration", "30", "--thrust-k", "4.34e-6", "--output", str(path)])
+    result = propid.propulsion(path, diameter="7in")
+    saved = tmp_path / "prop.json"
+    saved.write_text(json.dumps(result))
+    by_dict = propid.size(propeller=result, thrust="1N")
+    assert by_dict == propid.size(propeller=saved, thrust="1N")
+    assert by_dict == json.loads(
+        cli(["size", "--propeller", str(saved), "--thrust", "1N", "--format", "json"]).stdout
+    )
+    with pytest.raises(propid.InputError, match="--diameter 7 has no unit"):
+        propid.size(c_t=0.14, c_q=0.0107, diameter=7, thrust="6N")
