@@ -31,7 +31,6 @@ use pyo3::types::PyDict;
 
 use propid_io::import::{Imported, RcbenchOptions};
 use propid_io::tsv::{Row, Sample, StandColumn, TsvReader, HEADER};
-use propid_science::diagnose::Verdict;
 use propid_science::fit::{fit_columns as fit_in_memory, fit_path_with, Columns, FitOptions};
 
 create_exception!(
@@ -181,20 +180,14 @@ fn diagnose_named(
     args: &propid::cmd::diagnose::Args,
     name: &str,
 ) -> PyResult<(String, String, Option<String>)> {
+    let air = args.propeller.air().map_err(|e| py_error(&e.into()))?;
     let (report, outcome) = py
-        .detach(|| propid::cmd::diagnose::diagnose_input(input, args, name, &|_| {}))
+        .detach(|| propid::cmd::diagnose::diagnose_input(input, args.options(), air, name, &|_| {}))
         .map_err(|e| py_error(&e))?;
-    let cannot_judge = match &report.verdict {
-        Verdict::CannotJudge { reasons } => Some(format!(
-            "{name}: cannot judge: {}",
-            reasons
-                .iter()
-                .map(|w| w.to_string())
-                .collect::<Vec<_>>()
-                .join("; ")
-        )),
-        _ => None,
-    };
+    let cannot_judge = report
+        .verdict
+        .cannot_judge_reasons()
+        .map(|why| format!("{name}: cannot judge: {why}"));
     let value = propid::cmd::diagnose::json(&report, outcome.as_ref())
         .map_err(|e| PropidError::new_err(e.to_string()))?;
     let text = propid::cmd::diagnose::text(&report, outcome.as_ref(), name);
