@@ -9,7 +9,7 @@ cd firmware-demo
 # CARGO_HOME live (8 bytes apart between two machines). Mapped to fixed prefixes, the build is
 # the same wherever it runs, and the figures the docs quote can be compared byte for byte.
 # (CARGO_ENCODED_RUSTFLAGS replaces .cargo/config.toml's rustflags, so the linker script is repeated.)
-root=$(cd .. && pwd)
+root=$(cd .. && pwd -P)
 CARGO_ENCODED_RUSTFLAGS=$(printf '%s\x1f' -C link-arg=-Tlink.x "--remap-path-prefix=$root=/propid" \
   "--remap-path-prefix=${CARGO_HOME:-$HOME/.cargo}=/cargo" | sed 's/\x1f$//')
 export CARGO_ENCODED_RUSTFLAGS

@@ -383,16 +383,17 @@ fn bad_input_gets_a_clear_word_and_a_non_zero_exit() {
     );
     assert!(all.contains("gram-force but read as newtons"), "{all}");
 
-    // A diameter in inches without its unit.
+    // A diameter in inches without its unit: refused before anything is read, as by fit and
+    // diagnose.
     let out = propid(&["propulsion", s(&tsv), "--diameter", "7"], None);
-    assert_eq!(out.status.code(), Some(3));
+    assert_eq!(out.status.code(), Some(2));
     let all = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(
-        all.contains("--diameter 7 has no unit") && all.contains("write `7in`"),
+        all.contains("--diameter 7 has no unit") && all.contains("7in, 178mm"),
         "{all}"
     );
 

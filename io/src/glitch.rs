@@ -291,6 +291,32 @@ pub fn sentence(column: &str, n: usize, largest: &str, places: &str, done: &str)
     )
 }
 
+/// What a reader of propid's TSV (`name`) says of `n` glitches, the largest `largest` (in the
+/// column's unit), the first ten at `places`: left out, or kept with the flag that would leave
+/// them out (`despike`).
+pub fn tsv_sentence(
+    name: &str,
+    n: usize,
+    largest: f64,
+    places: &str,
+    left_out: bool,
+    despike: &str,
+) -> String {
+    let done = if left_out {
+        format!("those rows are left out ({despike})")
+    } else {
+        format!("kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; {despike} leaves those rows out")
+    };
+    format!("{name}: ")
+        + &sentence(
+            "velocity",
+            n,
+            &format!("{largest:.4e} in the column's unit"),
+            places,
+            &done,
+        )
+}
+
 /// Both passes over velocities in memory, by row index.
 pub fn find(v: &[f64]) -> Glitches {
     let mut scatter = Scatter::default();

@@ -25,6 +25,8 @@ from ._api import (
     import_autoquad,
     import_rcbench,
     plan,
+    propulsion,
+    size,
     read_tsv,
     simulate,
 )
@@ -50,6 +52,8 @@ __all__ = [
     "import_autoquad",
     "import_rcbench",
     "plan",
+    "propulsion",
+    "size",
     "read_tsv",
     "simulate",
 ]

@@ -66,6 +66,8 @@ def fit(
     c2_max: Optional[float] = None,
     diameter: Optional[float] = None,
     density: Optional[float] = None,
+    flip_torque: bool = False,
+    velocity_unit: Optional[str] = None,
 ) -> FitResult:
     """Fits the seed's model ``J·a = F − c1·ω − c2·ω|ω|`` exactly, with the seed's trimming
     (the last run of complete rows, its first 10 % dropped) and bounds — ``propid fit``.
@@ -75,7 +77,9 @@ def fit(
     all cores). The bounds are the command's flags; ``None`` takes the command's default
     (``mass_min`` 1e-9, ``mass_max`` 1e3, ``c1_max`` 0 — no viscous term, as the seed —,
     ``c2_max`` 1e2). ``diameter`` [m] adds the torque coefficient C_Q at ``density``
-    (default 1.225 kg/m³).
+    (default 1.225 kg/m³). ``flip_torque`` and ``velocity_unit`` (``"rpm"``, ``"rev/s"``,
+    ``"deg/s"``) read the columns as the command's ``--flip-torque`` and ``--velocity-unit`` do
+    (what its plausibility check asks for when the sign or the unit looks wrong).
 
     Raises :class:`propid.InputError` with the command's message when the data cannot give a
     fit. The work runs without the GIL.
@@ -87,6 +91,8 @@ def fit(
         c2_max=c2_max,
         diameter=diameter,
         density=density,
+        flip_torque=flip_torque,
+        velocity_unit=velocity_unit,
     )
     if _is_path(data):
         return FitResult(json.loads(_propid.fit_path(os.fspath(data), bounds)))
@@ -218,6 +224,76 @@ def simulate(*, output: Optional[Union[str, "os.PathLike[str]"]] = None, **optio
         frame = read_tsv(path)
     del frame.attrs["source"]  # the file is gone
     return frame
+
+
+def _write_tsv(data: Any, path: str) -> None:
+    """The known columns of a DataFrame or dict of arrays as propid's TSV (floats by ``repr``,
+    which reads back to the same float64; NaN as ``nan``)."""
+    frame = pd.DataFrame(data) if not isinstance(data, pd.DataFrame) else data
+    known = [c for c in ("ts_local", "t", "force", "velocity", "acceleration", "position",
+                         "thrust", "voltage", "current", "command") if c in frame.columns]
+    frame[known].to_csv(path, sep="\t", index=False, na_rep="nan")
+
+
+def propulsion(data: Data, *, diameter: Union[str, float], **options: Any) -> Dict[str, Any]:
+    """C_T and C_Q over speed, thrust per watt, the figure of merit and, where voltage and current
+    are logged, the motor's constants — ``propid propulsion``, run in-process.
+
+    ``data`` as for :func:`diagnose`, with the stand columns ``thrust``, ``voltage``, ``current``,
+    ``command`` where the stand has them (:func:`import_rcbench` gives them); a frame is written
+    to a temporary TSV for the command. ``diameter`` as the command takes it (``"7in"``,
+    ``"178mm"``, or metres). Other options are its flags, ``-`` written ``_``: ``pole_pairs``,
+    ``command_is_duty=True``, ``method="plateaus"``, ``reference_speed="12000rpm"``, ``motor=True``,
+    ``density``. Returns the result file's dict (what ``propid size --propeller`` reads). The
+    command's report goes to standard output.
+
+    Raises :class:`propid.CannotJudge` when a coefficient asked for is not identified (the dict is
+    then the exception's ``result``), :class:`propid.InputError` for bad input or a bad option.
+    """
+    with tempfile.TemporaryDirectory(prefix="propid-") as tmp:
+        out = os.path.join(tmp, "propulsion.json")
+        if _is_path(data):
+            path = os.fspath(data)
+        else:
+            path = os.path.join(tmp, "data.tsv")
+            _write_tsv(data, path)
+        args = ["propid", "propulsion", path, "--diameter", str(diameter), *_flags(options)]
+        try:
+            _propid.call_cli([*args, "--output", out])
+        except _propid.CannotJudge as e:
+            if os.path.exists(out):
+                with open(out) as f:
+                    e.result = json.load(f)
+            raise
+        with open(out) as f:
+            return json.load(f)
+
+
+def size(*, propeller: Optional[Union[Dict[str, Any], str, "os.PathLike[str]"]] = None, **options: Any) -> Dict[str, Any]:
+    """The drivetrain for a thrust, torque or speed — ``propid size``, run in-process.
+
+    ``propeller`` is a :func:`propulsion` result (its dict) or the path of a result file; or give
+    ``c_t``, ``c_q`` and ``diameter`` instead. Every other option is the command's flag, ``-``
+    written ``_`` (``propid size --help``): ``thrust="6N"``, ``hover_mass="1.6kg"``, ``rotors=4``,
+    ``kv=1750``, ``resistance="60mohm"``, ``no_load_current="0.8A"``, ``voltage="4S"``,
+    ``battery="3000mAh"``. Returns the answer as the command's ``--format json`` gives it. The
+    command's text goes to standard output.
+
+    Raises :class:`propid.InputError` with the command's message for a bad option.
+    """
+    with tempfile.TemporaryDirectory(prefix="propid-") as tmp:
+        out = os.path.join(tmp, "size.json")
+        args = ["propid", "size"]
+        if isinstance(propeller, Mapping):
+            path = os.path.join(tmp, "propeller.json")
+            with open(path, "w") as f:
+                json.dump(propeller, f)
+            args += ["--propeller", path]
+        elif propeller is not None:
+            args += ["--propeller", os.fspath(propeller)]
+        _propid.call_cli([*args, *_flags(options), "--output", out])
+        with open(out) as f:
+            return json.load(f)
 
 
 def plan(

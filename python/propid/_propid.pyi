@@ -27,6 +27,8 @@ class _Bounds(TypedDict):
     c2_max: Optional[float]
     diameter: Optional[float]
     density: Optional[float]
+    flip_torque: Optional[bool]
+    velocity_unit: Optional[str]
 
 def fit_path(path: str, bounds: _Bounds) -> str: ...
 def fit_columns(

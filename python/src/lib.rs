@@ -31,7 +31,6 @@ use pyo3::types::PyDict;
 
 use propid_io::import::{Imported, RcbenchOptions};
 use propid_io::tsv::{Row, Sample, StandColumn, TsvReader, HEADER};
-use propid_science::diagnose::Verdict;
 use propid_science::fit::{fit_columns as fit_in_memory, fit_path_with, Columns, FitOptions};
 
 create_exception!(
@@ -86,20 +85,33 @@ struct Bounds {
     c2_max: Option<f64>,
     diameter: Option<f64>,
     density: Option<f64>,
+    flip_torque: Option<bool>,
+    velocity_unit: Option<String>,
 }
 
-impl From<Bounds> for FitOptions {
-    fn from(b: Bounds) -> FitOptions {
+impl TryFrom<Bounds> for FitOptions {
+    type Error = PyErr;
+
+    /// The fit's options; a velocity unit the command would refuse is refused in its words.
+    fn try_from(b: Bounds) -> PyResult<FitOptions> {
         let d = FitOptions::default();
-        FitOptions {
+        let velocity_unit = match &b.velocity_unit {
+            Some(u) => propid_science::plausibility::SpeedUnit::parse(u)
+                .map_err(|e| InputError::new_err(format!("velocity_unit: {e}")))?,
+            None => d.reading.velocity_unit,
+        };
+        Ok(FitOptions {
             mass_min: b.mass_min.unwrap_or(d.mass_min),
             mass_max: b.mass_max.unwrap_or(d.mass_max),
             c1_max: b.c1_max.unwrap_or(d.c1_max),
             c2_max: b.c2_max.unwrap_or(d.c2_max),
             diameter: b.diameter,
             density: b.density.unwrap_or(d.density),
-            reading: d.reading,
-        }
+            reading: propid_science::plausibility::Reading {
+                flip_torque: b.flip_torque.unwrap_or(d.reading.flip_torque),
+                velocity_unit,
+            },
+        })
     }
 }
 
@@ -116,7 +128,7 @@ fn slice<'a>(a: &'a PyReadonlyArray1<'_, f64>, name: &str) -> PyResult<&'a [f64]
 /// `propid fit FILE --format json`: the fit's report as JSON.
 #[pyfunction]
 fn fit_path(py: Python<'_>, path: PathBuf, bounds: Bounds) -> PyResult<String> {
-    let options = FitOptions::from(bounds);
+    let options = FitOptions::try_from(bounds)?;
     let result = py.detach(|| fit_path_with(&path, &options, false, &mut |_, _| {}));
     let (report, _) = result.map_err(|e| py_error(&e.into()))?;
     json(&report)
@@ -133,7 +145,7 @@ fn fit_columns(
     name: &str,
     bounds: Bounds,
 ) -> PyResult<String> {
-    let options = FitOptions::from(bounds);
+    let options = FitOptions::try_from(bounds)?;
     let columns = Columns {
         t: slice(&t, "t")?,
         force: slice(&force, "force")?,
@@ -168,20 +180,14 @@ fn diagnose_named(
     args: &propid::cmd::diagnose::Args,
     name: &str,
 ) -> PyResult<(String, String, Option<String>)> {
+    let air = args.propeller.air().map_err(|e| py_error(&e.into()))?;
     let (report, outcome) = py
-        .detach(|| propid::cmd::diagnose::diagnose_input(input, args, name, &|_| {}))
+        .detach(|| propid::cmd::diagnose::diagnose_input(input, args.options(), air, name, &|_| {}))
         .map_err(|e| py_error(&e))?;
-    let cannot_judge = match &report.verdict {
-        Verdict::CannotJudge { reasons } => Some(format!(
-            "{name}: cannot judge: {}",
-            reasons
-                .iter()
-                .map(|w| w.to_string())
-                .collect::<Vec<_>>()
-                .join("; ")
-        )),
-        _ => None,
-    };
+    let cannot_judge = report
+        .verdict
+        .cannot_judge_reasons()
+        .map(|why| format!("{name}: cannot judge: {why}"));
     let value = propid::cmd::diagnose::json(&report, outcome.as_ref())
         .map_err(|e| PropidError::new_err(e.to_string()))?;
     let text = propid::cmd::diagnose::text(&report, outcome.as_ref(), name);

@@ -154,3 +154,21 @@ def test_beats_the_seed_objective_where_the_seed_stalls(tmp_path):
     seed_loss, our_loss = map(float, out.stdout.split())
     assert our_loss <= seed_loss
     assert rel(r.mass, 2e-5) < 5e-3 and rel(r.c2, 1.5e-8) < 5e-3, (r.mass, r.c2)
+
+
+def test_the_reading_options_answer_what_the_plausibility_check_asks(small_run):
+    # The check names the command's flags; the keywords of the same names answer it.
+    frame = propid.read_tsv(small_run)
+    truth = propid.fit(frame)
+    rpm = frame.copy()
+    rpm["velocity"] = rpm["velocity"] * 60 / (2 * np.pi)
+    with pytest.raises(propid.CannotJudge, match="--velocity-unit rpm"):
+        propid.fit(rpm)
+    assert propid.fit(rpm, velocity_unit="rpm").mass == pytest.approx(truth.mass, rel=1e-9)
+    flipped = frame.copy()
+    flipped["force"] = -flipped["force"]
+    with pytest.raises(propid.PropidError, match="--flip-torque"):
+        propid.fit(flipped)
+    assert propid.fit(flipped, flip_torque=True).mass == pytest.approx(truth.mass, rel=1e-12)
+    with pytest.raises(propid.InputError, match="velocity_unit: `furlongs` is not a speed unit"):
+        propid.fit(frame, velocity_unit="furlongs")

@@ -346,12 +346,13 @@ pub(crate) fn glitch_warning(name: &str, found: &propid_io::glitch::Glitches) ->
         return None;
     }
     let shown: Vec<String> = found.rows.iter().take(10).map(u64::to_string).collect();
-    Some(format!("{name}: ") + &propid_io::glitch::sentence(
-        "velocity",
+    Some(propid_io::glitch::tsv_sentence(
+        name,
         found.rows.len(),
-        &format!("{:.4e} in the column's unit", found.largest),
+        found.largest,
         &format!("lines {}", shown.join(", ")),
-        "kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; `propid diagnose --despike` leaves those rows out",
+        false,
+        "`propid diagnose --despike`",
     ))
 }
 

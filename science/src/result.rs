@@ -270,17 +270,8 @@ impl Outcome {
             );
             return;
         };
-        let identified = p::Air::with_density(air.density_kg_m3, None).and_then(|a| {
-            let options = p::Options {
-                diameter: air.diameter_m,
-                air: a,
-                chord: None,
-                reference_speed: None,
-                plateaus: p::PlateauOptions::default(),
-                method: p::MethodChoice::Auto,
-            };
-            p::identify(rec, &options)
-        });
+        let identified = p::Air::with_density(air.density_kg_m3, None)
+            .and_then(|a| p::identify(rec, &p::Options::at(air.diameter_m, a)));
         let coefficient = match identified {
             Ok(r) => r.thrust,
             Err(why) => {

@@ -2,9 +2,7 @@
 
 use std::path::PathBuf;
 
-use propid_science::diagnose::{
-    diagnose_rows_observed, report_figure, to_text, Options, Stage, Verdict,
-};
+use propid_science::diagnose::{diagnose_rows_observed, report_figure, to_text, Options, Stage};
 
 use propid_science::result::Outcome;
 
@@ -80,7 +78,7 @@ fn return_large_buffers_to_the_system() {
 /// Runs `propid diagnose`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     // Flags first: a bad diameter is reported before any input is read.
-    args.propeller.air()?;
+    let air = args.propeller.air()?;
     return_large_buffers_to_the_system();
     // Progress on stderr (drawn only when it is a terminal): reading and each selection round
     // take seconds on an hour-long log.
@@ -104,22 +102,14 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     };
     let diagnosed = diagnose_input(
         input,
-        &args,
+        args.options(),
+        air,
         &propid_io::error::display_name(&args.file),
         &progress,
     );
     bar.finish_and_clear();
     let (report, outcome) = diagnosed?;
-    let cannot_judge = match &report.verdict {
-        Verdict::CannotJudge { reasons } => Some(
-            reasons
-                .iter()
-                .map(|w| w.to_string())
-                .collect::<Vec<_>>()
-                .join("; "),
-        ),
-        _ => None,
-    };
+    let cannot_judge = report.verdict.cannot_judge_reasons();
     if let Some(path) = args.plot.as_ref().filter(|_| cannot_judge.is_none()) {
         crate::plot::write(path, &report_figure(&report))?;
         eprintln!("plots written to {}", path.display());
@@ -142,26 +132,33 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
 }
 
-/// The diagnosis of what was read (`name` in messages), as `args` ask for it, with its Result:
-/// what `propid diagnose` prints and the Python package's `diagnose` returns. What C_T's
-/// identification says joins the report's notes.
+impl Args {
+    /// The diagnosis's options these flags ask for.
+    pub fn options(&self) -> Options {
+        Options {
+            max_effects: self.max_effects,
+            reading: self.reading.reading(),
+        }
+    }
+}
+
+/// The diagnosis of what was read (`name` in messages), with its Result (C_Q and C_T with
+/// `air`'s diameter and density, when given): what `propid diagnose` prints, the end of
+/// `drive --fit` and the Python package's `diagnose` return. What C_T's identification says
+/// joins the report's notes.
 pub fn diagnose_input(
     input: super::DiagnosisInput,
-    args: &Args,
+    options: Options,
+    air: Option<propid_science::result::Air>,
     name: &str,
     progress: &(dyn Fn(Stage) + Sync),
 ) -> anyhow::Result<(propid_science::diagnose::Report, Option<Outcome>)> {
-    let air = args.propeller.air()?;
     let super::DiagnosisInput {
         rows,
         skipped,
         notes,
         thrust,
     } = input;
-    let options = Options {
-        max_effects: args.max_effects,
-        reading: args.reading.reading(),
-    };
     let mut report =
         diagnose_rows_observed(rows, options, progress).map_err(|e| e.in_file(name))?;
     if skipped > 0 {

@@ -697,6 +697,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // The motor is at rest (STANDBY and zero were sent above): the recording's Result, as
         // `propid diagnose` gives it.
         if let Some(path) = s.output.as_deref().or(copy.as_ref().map(|c| c.path())) {
+            eprintln!(
+                "drive: the motor is at rest; diagnosing the recording (seconds on a long run)"
+            );
             eprint!("{}", result_of_recording(path));
         }
     }
@@ -787,37 +790,28 @@ impl<A: Write, B: Write> Write for Tee<A, B> {
     }
 }
 
-/// The Result of a recorded run (`drive --fit`'s last words): the diagnosis's, or why there is
-/// none. Never fails the command: the run itself is what its exit status reports.
+/// The Result of a recorded run (`drive --fit`'s last words): `propid diagnose`'s, or why there
+/// is none. Never fails the command: the run itself is what its exit status reports.
 fn result_of_recording(path: &std::path::Path) -> String {
-    let reading = propid_science::plausibility::Reading::default();
-    let input = match super::DiagnosisInput::read(path, &reading, false) {
-        Ok(input) => input,
-        Err(e) => return format!("drive: no Result: {e}\n"),
-    };
-    let samples: Vec<_> = input.rows.iter().map(|row| row.sample).collect();
-    let report = match propid_science::diagnose::diagnose(
-        &samples,
-        propid_science::diagnose::Options::default(),
-    ) {
-        Ok(report) => report,
-        Err(e) => return format!("drive: no Result: {e}\n"),
-    };
-    match propid_science::result::Outcome::from_diagnosis(&report, input.skipped as u64, None) {
-        Some(o) => format!(
+    use propid_science::diagnose::Options;
+    let diagnosed = super::DiagnosisInput::read(path, &Options::default().reading, false)
+        .map_err(anyhow::Error::from)
+        .and_then(|input| {
+            let name = propid_io::error::display_name(path);
+            super::diagnose::diagnose_input(input, Options::default(), None, &name, &|_| {})
+        });
+    match diagnosed {
+        Err(e) => format!("drive: no Result: {e:#}\n"),
+        Ok((_, Some(o))) => format!(
             "drive: the recording's Result (`propid diagnose` on the rows written; `--diameter` there adds C_Q):\n{}",
             o.to_text()
         ),
-        None => format!(
+        Ok((report, None)) => format!(
             "drive: no Result: {}\n",
-            match &report.verdict {
-                propid_science::diagnose::Verdict::CannotJudge { reasons } => reasons
-                    .iter()
-                    .map(|w| w.to_string())
-                    .collect::<Vec<_>>()
-                    .join("; "),
-                _ => "the diagnosis could not judge".into(),
-            }
+            report
+                .verdict
+                .cannot_judge_reasons()
+                .unwrap_or_else(|| "the diagnosis could not judge".into())
         ),
     }
 }

@@ -9,8 +9,8 @@ use std::path::{Path, PathBuf};
 use propid_science::propulsion::read::{read_path, ReadOptions};
 use propid_science::propulsion::units::{parse, Dimension, Parsed};
 use propid_science::propulsion::{
-    figure::figure, identify, text::propulsion_text, Air, MethodChoice, Options, PlateauOptions,
-    Propulsion, Quantity,
+    figure::figure, identify, text::propulsion_text, Air, MethodChoice, Options, Propulsion,
+    Quantity,
 };
 
 use crate::{CannotJudge, InputError};
@@ -147,16 +147,14 @@ impl Args {
             ));
         }
         let options = Options {
-            diameter: self.diameter.si,
-            air,
             chord: self.chord.map(|c| c.si),
             reference_speed: self.reference_speed.map(|s| s.si / std::f64::consts::TAU),
-            plateaus: PlateauOptions::default(),
             method: match self.method {
                 Method::Auto => MethodChoice::Auto,
                 Method::Plateaus => MethodChoice::Plateaus,
                 Method::Dynamic => MethodChoice::Dynamic,
             },
+            ..Options::at(self.diameter.si, air)
         };
         options.check().map_err(|e| {
             InputError::invalid(format!("--diameter/--chord/--reference-speed: {e}"))
@@ -215,8 +213,10 @@ fn unanswered(p: &Propulsion, motor: bool) -> Vec<String> {
 /// Runs `propid propulsion`.
 pub fn run(args: Args) -> anyhow::Result<()> {
     let options = args.options()?;
+    // A bare number outside 0.02–3 m is refused, as by fit and diagnose (7 is inches far more
+    // often than a 7 m rotor).
     if let Some(note) = unit_notes("--diameter", &args.diameter, Dimension::Length, 0.02..=3.0) {
-        eprintln!("warning: {note}");
+        return Err(InputError::invalid(note).into());
     }
     if let Some(out) = &args.output {
         if out == &args.file {

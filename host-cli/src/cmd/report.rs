@@ -110,19 +110,8 @@ fn propulsion_sections(
             "{head}<p>The file has a stand's columns (thrust, voltage or current): give <code>--diameter</code> (7in, 0.1778m) for C_T and C_Q over speed, the figure of merit, thrust per watt and the motor's efficiency map (<code>propid propulsion</code>).</p></section>\n"
         )]);
     };
-    let identified = p::Air::with_density(options.density, None).and_then(|air| {
-        p::identify(
-            &rec,
-            &p::Options {
-                diameter,
-                air,
-                chord: None,
-                reference_speed: None,
-                plateaus: p::PlateauOptions::default(),
-                method: p::MethodChoice::Auto,
-            },
-        )
-    });
+    let identified = p::Air::with_density(options.density, None)
+        .and_then(|air| p::identify(&rec, &p::Options::at(diameter, air)));
     Ok(match identified {
         Ok(result) => vec![
             format!(

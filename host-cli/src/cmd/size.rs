@@ -40,6 +40,9 @@ pub struct Args {
     /// A `propid propulsion` result file (.json, .yaml).
     #[arg(long, conflicts_with_all = ["c_t", "c_q"])]
     pub propeller: Option<PathBuf>,
+    /// Also write the answer as JSON to this file (what the Python package's `size` reads).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
     /// A propeller's thrust coefficient (with --c-q and --diameter, instead of --propeller).
     #[arg(long, requires_all = ["c_q", "diameter"])]
     pub c_t: Option<f64>,
@@ -137,7 +140,7 @@ impl Args {
             (None, Some(ct), Some(cq)) => {
                 let d = self.diameter.ok_or_else(|| InputError::invalid("--c-t and --c-q need --diameter".into()))?;
                 if let Some(note) = unit_notes("--diameter", &d, Dimension::Length, 0.02..=3.0) {
-                    eprintln!("warning: {note}");
+                    return Err(InputError::invalid(note));
                 }
                 for (flag, c, kind) in [("--c-t", ct, Kind::Thrust), ("--c-q", cq, Kind::Torque)] {
                     if !(c > 0.0 && c.is_finite()) {
@@ -250,6 +253,14 @@ impl Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     let q = args.question()?;
     let answer = size(&q).map_err(InputError::invalid)?;
+    if let Some(out) = &args.output {
+        let inputs: Vec<&std::path::Path> = args.propeller.iter().map(|p| p.as_path()).collect();
+        let mut file = propid_io::output::AtomicOutput::create(out, &inputs)?;
+        use std::io::Write as _;
+        file.write_all((serde_json::to_string_pretty(&answer)? + "\n").as_bytes())
+            .and_then(|()| file.commit())
+            .map_err(|e| InputError::invalid(format!("{}: cannot write: {e}", out.display())))?;
+    }
     let text = match args.format {
         Format::Text => size_text(&answer),
         Format::Json => serde_json::to_string_pretty(&answer)? + "\n",

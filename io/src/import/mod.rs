@@ -270,18 +270,14 @@ pub fn tsv_glitches(name: &str, rows: &mut Vec<Row>, remove: bool) -> Option<Str
         .take(10)
         .map(|&k| format!("{:.4}", rows[k].sample.t))
         .collect();
-    let sentence = format!("{name}: ")
-        + &crate::glitch::sentence(
-            "velocity",
-            spikes.len(),
-            &format!("{largest:.4e} in the column's unit"),
-            &format!("t = {} s", times.join(", ")),
-            if remove {
-                "those rows are left out (--despike)"
-            } else {
-                "kept: a glitch is a false speed in the drag term and, where the acceleration was differentiated from the speed, a false pair of large accelerations; --despike leaves those rows out"
-            },
-        );
+    let sentence = crate::glitch::tsv_sentence(
+        name,
+        spikes.len(),
+        largest,
+        &format!("t = {} s", times.join(", ")),
+        remove,
+        "--despike",
+    );
     if remove {
         let mut k = 0;
         let mut next = spikes.iter().peekable();

@@ -312,6 +312,22 @@ pub enum Verdict {
     },
 }
 
+impl Verdict {
+    /// Why the data cannot support a verdict, in one line (`None` for any other verdict).
+    pub fn cannot_judge_reasons(&self) -> Option<String> {
+        match self {
+            Verdict::CannotJudge { reasons } => Some(
+                reasons
+                    .iter()
+                    .map(|w| w.to_string())
+                    .collect::<Vec<_>>()
+                    .join("; "),
+            ),
+            _ => None,
+        }
+    }
+}
+
 /// The diagnosis.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {

@@ -176,6 +176,19 @@ pub struct Options {
 }
 
 impl Options {
+    /// What `propid propulsion --diameter D` asks by default: plateaus where there are three,
+    /// else the dynamic fit; no chord; the log-mean plateau speed as the reference.
+    pub fn at(diameter: f64, air: Air) -> Options {
+        Options {
+            diameter,
+            air,
+            chord: None,
+            reference_speed: None,
+            plateaus: PlateauOptions::default(),
+            method: MethodChoice::Auto,
+        }
+    }
+
     /// Checks the geometry.
     pub fn check(&self) -> Result<(), String> {
         if !(self.diameter > 0.0 && self.diameter.is_finite()) {

@@ -1,82 +1,19 @@
 //! `coulomb_friction`: a constant torque opposing rotation (bearings, seals, cogging's mean, or a
 //! torque estimate's offset on a rotor that reverses). Regressor −sgn ω.
 
-use super::{EffectKind, 
-    admissible_torque, BaseTerm, Candidate, Design, Enters, Estimate, Fitted, Inadmissible, Shape,
-    Slot, LOW_SPEED_STEPS,
-};
-use crate::diagnose::model::{At, Effect, Lag, Prepared};
-use crate::diagnose::signals::Signals;
-use crate::diagnose::tune::{Tuned, Tuner};
-use crate::diagnose::SeparatingRun;
+use super::torque_term::TorqueTerm;
+use super::{BaseTerm, Shape};
 
 /// See the module documentation.
-pub(crate) struct CoulombFriction;
-
-impl Candidate for CoulombFriction {
-    fn name(&self) -> &'static str {
-        "coulomb_friction"
-    }
-    fn unit(&self) -> &'static str {
-        "N·m"
-    }
-    fn enters(&self) -> Enters {
-        Enters::Equation
-    }
-    fn slot(&self) -> Slot {
-        Slot::Term
-    }
-    fn parameters(&self) -> usize {
-        1
-    }
-    fn columns(&self, _: &Effect) -> usize {
-        1
-    }
-    fn prepare(&self, _: &Effect, _: &Signals, _: &mut Prepared) {}
-    fn row(&self, _: &Effect, at: &At, out: &mut [f64]) {
-        out[0] = -at.sgn;
-    }
-    fn differentiated(&self, _: &Effect) -> bool {
-        false
-    }
-    fn instrument(&self, _: &Effect, _: &Signals, _: usize, _: &mut [f64]) {}
-    fn held_in_simulation(&self) -> bool {
-        false
-    }
-    fn refines(&self) -> Option<EffectKind> {
-        None
-    }
-    fn tune(&self, t: &Tuner) -> Option<Tuned> {
-        t.linear()
-    }
-    fn retune(&self, _: &Effect, _: &Tuner) -> Option<Tuned> {
-        None
-    }
-    fn estimate(&self, _: &Effect, f: &Fitted) -> Estimate {
-        f.torque(0)
-    }
-    fn admissible(&self, _: &Effect, v: Estimate, _: &Fitted) -> Result<(), Inadmissible> {
-        admissible_torque(v, true)
-    }
-    fn explanation(&self, _: &Effect, value: f64) -> String {
+pub(crate) const COULOMB_FRICTION: TorqueTerm = TorqueTerm {
+    name: "coulomb_friction",
+    unit: "N·m",
+    column: |at| -at.sgn,
+    design: f64::signum,
+    positive: true,
+    shape: Shape::Constant { odd: true },
+    base_term: |_| BaseTerm::None,
+    explanation: |value| {
         format!("a constant torque of {value:.3e} N·m opposes rotation (bearing or cogging friction, or a torque-estimate offset)")
-    }
-    fn shape(&self) -> Shape {
-        Shape::Constant { odd: true }
-    }
-    fn lag(&self, _: &Effect, _: f64) -> Option<Lag> {
-        None
-    }
-    fn revealing_run(&self) -> SeparatingRun {
-        LOW_SPEED_STEPS
-    }
-    fn simulation_sees(&self) -> bool {
-        true
-    }
-    fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
-        BaseTerm::None
-    }
-    fn design_column(&self, d: &Design) -> Option<Vec<f64>> {
-        Some(d.speed.iter().map(|w| w.signum()).collect())
-    }
-}
+    },
+};

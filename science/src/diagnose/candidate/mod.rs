@@ -299,7 +299,8 @@ pub(crate) trait Candidate: Sync {
     fn design_column(&self, d: &Design) -> Option<Vec<f64>>;
 }
 
-/// Declares the effects: one line each, `Variant => module::Type`. Generates the module
+/// Declares the effects: one line each, `Variant => module::CANDIDATE` (a unit struct, or a const
+/// of a shared type such as [`torque_term::TorqueTerm`]). Generates the module
 /// declarations, [`EffectKind`] and its one exhaustive dispatch.
 macro_rules! registry {
     ($( $(#[$doc:meta])* $kind:ident => $module:ident :: $ty:ident, )*) => {
@@ -326,15 +327,18 @@ macro_rules! registry {
     };
 }
 
+/// The one-column torque terms' shared implementation (coulomb, offset, viscous).
+mod torque_term;
+
 registry! {
     /// Constant torque opposing rotation [N·m].
-    CoulombFriction => coulomb::CoulombFriction,
+    CoulombFriction => coulomb::COULOMB_FRICTION,
     /// The reported force reads this much when no torque acts [N·m].
-    ForceOffset => offset::ForceOffset,
+    ForceOffset => offset::FORCE_OFFSET,
     /// A torque braking the rotor while it slows, missing from the reported force [N·m].
     BrakingTorque => braking::BrakingTorque,
     /// Torque ∝ ω [N·m·s/rad] (the seed's c1).
-    ViscousFriction => viscous::ViscousFriction,
+    ViscousFriction => viscous::VISCOUS_FRICTION,
     /// Aerodynamic torque ∝ |ω|^p with p ≠ 2 [–].
     DragExponent => drag_exponent::DragExponent,
     /// The torque the load feels lags the reported force [s].
