@@ -312,6 +312,12 @@ impl Decision {
 
 /// Rules 1–4: what the evidence on one effect says by itself (`None`: it passes).
 pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
+    judged(parent, e, false)
+}
+
+/// Rules 1–4, rule 3 taken as met where `consistent` (the effect is tied with one that meets it:
+/// see [`forward`]).
+fn judged(parent: &FoldErrors, e: &Evidence, consistent: bool) -> Option<Decision> {
     if let Err(why) = e.admissible {
         return Some(Decision::rejected(Rejection::Inadmissible { why }));
     }
@@ -319,7 +325,7 @@ pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
     if gain.mean.is_nan() || gain.mean <= 0.0 {
         return Some(Decision::rejected(Rejection::NoGain));
     }
-    if !gain.significant() {
+    if !consistent && !gain.significant() {
         return Some(Decision::rejected(Rejection::Inconsistent));
     }
     let (equation, _) = Gain::parts(parent, &e.errors);
@@ -356,13 +362,38 @@ pub struct Step {
 pub fn forward(parent: &FoldErrors, trials: &[Evidence]) -> Step {
     let mut decisions: Vec<Option<Decision>> = trials.iter().map(|e| judge(parent, e)).collect();
     let gains: Vec<Gain> = trials.iter().map(|e| Gain::of(parent, &e.errors)).collect();
-    let passing: Vec<usize> = (0..trials.len())
+    let mut passing: Vec<usize> = (0..trials.len())
         .filter(|&i| decisions[i].is_none())
         .collect();
-    let Some(&leader) = passing
-        .iter()
-        .max_by(|&&a, &&b| gains[a].mean.total_cmp(&gains[b].mean).then(b.cmp(&a)))
-    else {
+    let best = |passing: &[usize]| {
+        passing
+            .iter()
+            .copied()
+            .max_by(|&a, &b| gains[a].mean.total_cmp(&gains[b].mean).then(b.cmp(&a)))
+    };
+    let Some(first) = best(&passing) else {
+        return Step {
+            decisions: decisions.into_iter().flatten().collect(),
+            named: None,
+        };
+    };
+    // Rule 3 asks whether an effect's gain stands out of its own spread across the folds. An
+    // effect the data cannot separate from one whose gain does (rule 5's test) has, within that
+    // spread, the same gain: it meets rule 3 with it. Otherwise two models the data cannot tell
+    // apart would be decided between by the count of folds each wins alone (a Coulomb friction
+    // better in 9 of 10 folds and named, a viscous friction in 8 and rejected, on a 100 Hz chirp
+    // where their gains are 0.895 ± 0.396 and 0.899 ± 0.400).
+    for i in 0..trials.len() {
+        if decisions[i] == Some(Decision::rejected(Rejection::Inconsistent))
+            && judged(parent, &trials[i], true).is_none()
+            && !separates(&trials[i].errors, &trials[first].errors)
+        {
+            decisions[i] = None;
+            passing.push(i);
+        }
+    }
+    passing.sort_unstable();
+    let Some(leader) = best(&passing) else {
         return Step {
             decisions: decisions.into_iter().flatten().collect(),
             named: None,
@@ -379,6 +410,7 @@ pub fn forward(parent: &FoldErrors, trials: &[Evidence]) -> Step {
             tied.push(i);
         }
     }
+
     // Rule 6: the simplest of the tied class is named.
     let named = *tied
         .iter()

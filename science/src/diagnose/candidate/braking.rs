@@ -32,11 +32,19 @@ pub(crate) struct BrakingTorque;
 /// deceleration threshold ≥ 0).
 const SLOPE_BRAKING: f64 = -1.0;
 
+/// The parameter for "while the velocity's ±20 ms slope falls", each spell's start and end moved
+/// to where the velocity kinks (`Signals::decelerating_at_kinks`).
+const KINK_BRAKING: f64 = -2.0;
+
 /// How much of a braking torque acts at each sample: 1, 0, or ½ next to a switch.
 fn braking_samples(s: &Signals, on: f64) -> Vec<f64> {
-    if on == SLOPE_BRAKING {
-        return s
-            .decelerating
+    if on == SLOPE_BRAKING || on == KINK_BRAKING {
+        let spells = if on == SLOPE_BRAKING {
+            &s.decelerating
+        } else {
+            &s.decelerating_at_kinks
+        };
+        return spells
             .iter()
             .map(|&d| if d { 1.0 } else { 0.0 })
             .collect();
@@ -114,7 +122,7 @@ impl Candidate for BrakingTorque {
         // on its own, filtered estimate, with a threshold against its noise): below 2σ the state
         // would flicker with the noise wherever the speed is steady.
         let floor = 2.0 * t.s.acceleration_noise;
-        let grid = std::iter::once(SLOPE_BRAKING).chain(
+        let grid = [SLOPE_BRAKING, KINK_BRAKING].into_iter().chain(
             (0..=8)
                 .map(|k| floor + 25.0 * k as f64)
                 .filter(|&x| x <= 200.0),
@@ -135,7 +143,7 @@ impl Candidate for BrakingTorque {
         // acceleration's noise is correlated from sample to sample, and a 0.04 mN·m "braking"
         // gained 3 % on held-out data).
         let step = v.value * f.theta[0];
-        if e.param != SLOPE_BRAKING && step < f.rms {
+        if e.param >= 0.0 && step < f.rms {
             return Err(Inadmissible::BelowNoise {
                 step,
                 noise: f.rms,
