@@ -179,6 +179,7 @@ pub(crate) fn run(
                     mean: f64::NAN,
                     stderr: f64::NAN,
                     folds_better: 0,
+                    rank_p: 1.0,
                 },
             ));
         effects.push(NamedEffect {

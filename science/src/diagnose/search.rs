@@ -434,6 +434,7 @@ impl Search<'_> {
                         mean: f64::NAN,
                         stderr: f64::NAN,
                         folds_better: 0,
+                        rank_p: 1.0,
                     },
                     decision: Decision::Rejected { reason },
                 }),
