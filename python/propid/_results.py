@@ -224,6 +224,17 @@ class Diagnosis(_Record):
     near_misses: _Field[List[Dict[str, Any]]] = _Field(
         "near_misses", "Candidates that came close, with the run that would show them."
     )
+    concentration: _Field[Optional[Dict[str, Any]]] = _Field(
+        "concentration",
+        "Where the remaining held-out error concentrates (a condition or a window of time), if it does.",
+        "optional",
+    )
+    left_out: _Field[Optional[Dict[str, Any]]] = _Field(
+        "left_out",
+        "The span of an event in time the extended model was fitted without (from_s, to_s, samples), "
+        "and J and c2 with it (inertia_with, c2_with).",
+        "optional",
+    )
     notes: _Field[List[str]] = _Field("notes", "Notes about the data.")
 
     def __init__(self, data: Dict[str, Any], text: str = "") -> None:

@@ -244,6 +244,10 @@ impl Outcome {
             warnings: r.notes.clone(),
             caveat: TORQUE_CONSTANT_CAVEAT,
         };
+        if let Some(l) = &r.left_out {
+            out.warnings
+                .push(crate::diagnose::left_out_sentence(l, &r.extended));
+        }
         if !r.ambiguities.is_empty() {
             out.warnings.push(format!(
                 "the data cannot rule out {} other model(s): model_spread is how far their values lie from these",

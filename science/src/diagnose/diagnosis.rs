@@ -6,7 +6,7 @@
 use propid_io::InputError;
 
 use super::candidate::{separating_run, BaseTerm, EffectKind};
-use super::engine::{fit, fit_on_all, held_out_residuals, residuals, Fit};
+use super::engine::{fit, fit_every_row, fit_on_all, held_out_residuals, residuals, Fit};
 use super::model::{Effect, Model};
 use super::report::{
     Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
@@ -16,7 +16,7 @@ use super::search::{estimate_of, search, Found, Scored};
 use super::select::{self, Decision, Evidence};
 use super::signals::{correlation, Signals};
 use super::simulate::{rms_error, simulate, SimPlan};
-use super::structure::{concentration, harmonic_correlations, periodogram};
+use super::structure::{concentration, event_span, harmonic_correlations, periodogram, LeftOut};
 use super::{Observer, Options, Stage, HOLDOUT, STEADY_SHARE};
 
 /// Peak of the residual's spectrum over its median from which a periodic probe is tried.
@@ -218,7 +218,36 @@ pub(crate) fn run(
     let unexplained = (ratio > PEAK_TO_MEDIAN)
         .then(|| periodic(&found.model, s, &plan, f_peak, ratio, &correlations))
         .flatten();
-    let concentration = held_out_residuals(&model, s).and_then(|r| concentration(s, &r));
+    let held_out = held_out_residuals(&model, s);
+    let concentration = held_out.as_ref().and_then(|r| concentration(s, r));
+    let left_out = if s.excluded.is_empty() {
+        // Where the concentration is an event in time: its span, which the diagnosis then
+        // leaves out of every fit and score (`super::diagnose_complete` runs it again).
+        held_out
+            .as_ref()
+            .zip(concentration.as_ref())
+            .and_then(|(r, c)| event_span(s, r, c))
+            .map(|w| LeftOut {
+                from_s: s.t[w.start],
+                to_s: s.t[w.end - 1],
+                samples: w.len(),
+                inertia_with: extended.inertia,
+                c2_with: extended.c2,
+            })
+    } else {
+        // Left out: what its samples would have done to the model.
+        fit_every_row(&model, s).map(|f| {
+            let with = base_model_of(&f, &model, s);
+            LeftOut {
+                from_s: s.t[s.excluded.start],
+                to_s: s.t[s.excluded.end - 1],
+                samples: s.excluded.len(),
+                inertia_with: with.inertia,
+                c2_with: with.c2,
+            }
+        })
+    };
+    drop(held_out);
     let mut unidentified = Unidentified::of(&extended);
     // Errors in the regressor: the torque's noise biases J beyond what its standard error says.
     let bias = crate::plausibility::torque_noise_bias(&s.force, &s.velocity);
@@ -272,6 +301,7 @@ pub(crate) fn run(
         near_misses,
         unidentified,
         concentration,
+        left_out,
         notes,
         traces,
     };

@@ -137,8 +137,15 @@ const BLOCK_ROWS: usize = 1024;
 /// Rows accumulated (a profiling count).
 pub static ROWS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
-/// Sums the rows of `range` into `folds` contiguous blocks; with `stride` k > 1, only every k-th
-/// block of [`BLOCK_ROWS`] rows.
+/// Which rows of a range a sum reads.
+struct Read {
+    /// With k > 1, only every k-th block of [`BLOCK_ROWS`] rows.
+    stride: usize,
+    /// Rows it leaves out (an excluded event, see [`Signals::excluded`]).
+    skip: Range<usize>,
+}
+
+/// Sums the rows of `range` (as `read` says) into `folds` contiguous blocks.
 fn accumulate<const N: usize>(
     model: &Model,
     p: &Prepared,
@@ -146,13 +153,15 @@ fn accumulate<const N: usize>(
     range: Range<usize>,
     folds: usize,
     iv: bool,
-    stride: usize,
+    read: Read,
 ) -> Vec<Stats<N>> {
+    let Read { stride, skip } = read;
     ROWS.fetch_add(range.len() / stride, std::sync::atomic::Ordering::Relaxed);
     let mut eqs = vec![Stats::<N>::new(iv); folds];
     let len = range.len().max(1);
     let start = range.start;
-    let kept = |i: usize| stride == 1 || ((i - start) / BLOCK_ROWS) % stride == 0;
+    let kept =
+        |i: usize| (stride == 1 || ((i - start) / BLOCK_ROWS) % stride == 0) && !skip.contains(&i);
     let mut add = |i: usize, row: [f64; MAX_COLUMNS]| {
         let fold = (i - range.start) * folds / len;
         let phi: [f64; N] = core::array::from_fn(|k| row[k]);
@@ -192,8 +201,10 @@ fn fit_n<const N: usize>(
     p: &Prepared,
     s: &Signals,
     range: Range<usize>,
+    skip: Range<usize>,
 ) -> Option<Fit> {
-    let eq = accumulate::<N>(model, p, s, range, 1, model.differentiated(), 1).pop()?;
+    let read = Read { stride: 1, skip };
+    let eq = accumulate::<N>(model, p, s, range, 1, model.differentiated(), read).pop()?;
     let (theta, stderr) = eq.solve()?;
     let n = eq.least_squares().count();
     Some(Fit {
@@ -241,7 +252,11 @@ fn cross_fit_n<const N: usize>(
     stride: usize,
 ) -> Option<CrossFit> {
     let iv = thetas && model.differentiated();
-    let eqs = accumulate::<N>(model, p, s, s.first..s.len(), FOLDS, iv, stride);
+    let read = Read {
+        stride,
+        skip: s.excluded.clone(),
+    };
+    let eqs = accumulate::<N>(model, p, s, s.first..s.len(), FOLDS, iv, read);
     let mut folds = [0.0; FOLDS];
     let (mut total, mut count) = (0.0, 0.0);
     let mut fitted = Vec::new();
@@ -301,7 +316,7 @@ pub(crate) fn fit_prepared(
     s: &Signals,
     range: Range<usize>,
 ) -> Option<Fit> {
-    by_width!(model, fit_n, model, p, s, range)
+    by_width!(model, fit_n, model, p, s, range, s.excluded.clone())
 }
 
 /// Fits `model` on the samples in `range`.
@@ -312,6 +327,13 @@ pub(crate) fn fit(model: &Model, s: &Signals, range: Range<usize>) -> Option<Fit
 /// Fits `model` on every sample after the warm-up.
 pub(crate) fn fit_on_all(model: &Model, s: &Signals) -> Option<Fit> {
     fit(model, s, s.first..s.len())
+}
+
+/// Fits `model` on every sample after the warm-up, the excluded span included (what its samples
+/// do to the parameters).
+pub(crate) fn fit_every_row(model: &Model, s: &Signals) -> Option<Fit> {
+    let p = model.prepare(s);
+    by_width!(model, fit_n, model, &p, s, s.first..s.len(), 0..0)
 }
 
 /// The held-out acceleration scores of `model` (blocked [`FOLDS`]-fold cross-validation), as a

@@ -55,8 +55,8 @@ pub use select::{
 #[doc(hidden)]
 pub use simulate::SIMULATED;
 pub use steady::DragLaw;
-pub use structure::{Concentration, Condition, CONCENTRATION_RATIO};
-pub use text::{figure as report_figure, to_text};
+pub use structure::{Concentration, Condition, LeftOut, CONCENTRATION_RATIO, EVENT_SHARE};
+pub use text::{figure as report_figure, left_out_sentence, to_text};
 
 /// Where a diagnosis is, for a progress display (the library never prints): on a log of an hour
 /// at 500 Hz the selection takes seconds per round.
@@ -280,8 +280,16 @@ fn diagnose_complete(
     if !why.is_empty() {
         return Ok(Report::cannot_judge(extent.samples, extent.duration_s, why));
     }
-    let signals = Signals::new(complete)?;
-    let report = match diagnosis::run(&signals, options, progress) {
+    let mut signals = Signals::new(complete)?;
+    let mut first = diagnosis::run(&signals, options, progress);
+    // An event in time the model does not hold (a load transient): diagnosed again without its
+    // samples, so that neither the search nor the fit reads them.
+    if let Some(l) = first.as_ref().ok().and_then(|r| r.left_out.clone()) {
+        let from = signals.t.partition_point(|&t| t < l.from_s);
+        signals.excluded = from..from + l.samples;
+        first = diagnosis::run(&signals, options, progress);
+    }
+    let report = match first {
         Ok(mut r) => {
             r.steady_state = steady::drag_law(&signals).filter(|_| r.steady_share > STEADY_SHARE);
             r

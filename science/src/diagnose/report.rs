@@ -9,7 +9,7 @@ use super::model::LagShape;
 use super::search::CandidateScore;
 use super::select::Gain;
 use super::steady::DragLaw;
-use super::structure::Concentration;
+use super::structure::{Concentration, LeftOut};
 use crate::excitation::Pattern;
 
 /// A model's seed parameters.
@@ -358,6 +358,9 @@ pub struct Report {
     pub steady_state: Option<DragLaw>,
     /// Where the remaining held-out error of the extended model concentrates, if it does.
     pub concentration: Option<Concentration>,
+    /// Where that concentration is an event in time: the span the extended model (its J, c2 and
+    /// effects) was fitted without, and J and c2 with it.
+    pub left_out: Option<LeftOut>,
     /// Effects the data cannot tell from one that is named.
     pub ambiguities: Vec<Ambiguity>,
     /// Candidates that came close to being named, best first.
@@ -425,6 +428,7 @@ impl Report {
             near_misses: Vec::new(),
             unidentified: Vec::new(),
             concentration: None,
+            left_out: None,
             notes: Vec::new(),
             traces: Traces::default(),
         }
@@ -439,7 +443,10 @@ impl Report {
             Verdict::NotIdentified
         } else if !self.ambiguities.is_empty() {
             Verdict::Ambiguous
-        } else if self.unexplained.is_some() || self.concentration.is_some() {
+        } else if self.unexplained.is_some()
+            || self.concentration.is_some()
+            || self.left_out.is_some()
+        {
             Verdict::Unexplained
         } else if self.effects.is_empty() {
             Verdict::NothingWrong

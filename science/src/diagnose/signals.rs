@@ -53,6 +53,9 @@ pub struct Signals {
     /// of the candidate models (their initial state is unknown), so every model is judged on the
     /// same samples.
     pub first: usize,
+    /// Samples no fit or score reads (empty: none): the span of an event the model does not hold
+    /// (see [`super::structure::event_span`]), found by a first diagnosis of the whole record.
+    pub excluded: std::ops::Range<usize>,
 }
 
 /// The slope of a straight line fitted by least squares to the samples within ±`h` of each one
@@ -243,6 +246,7 @@ impl Signals {
             force_noise,
             force_updates,
             force_steps,
+            excluded: 0..0,
         })
     }
 

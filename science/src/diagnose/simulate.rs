@@ -46,6 +46,8 @@ impl SimPlan {
                     .step_by(per_window)
                     .map(|w| w..(w + per_window).min(b))
                     .filter(|r| r.len() >= 3)
+                    // A window through an excluded event would score the event.
+                    .filter(|r| r.end <= s.excluded.start || r.start >= s.excluded.end)
                     .collect();
                 let keep = (per_fold_budget / per_window).max(1);
                 if all.len() <= keep {

@@ -1,7 +1,8 @@
 //! The diagnosis as text and as plots, rendered from the typed report.
 
+use super::report::BaseModel;
 use super::select::Decision;
-use super::structure::Condition;
+use super::structure::{Condition, LeftOut};
 use super::EffectKind;
 use super::{Report, Verdict};
 use crate::figure::{Figure, Panel, Series, Style};
@@ -219,6 +220,9 @@ pub fn to_text(r: &Report, source: &str) -> String {
             c.error_percent, c.samples_percent, c.ratio
         );
     }
+    if let Some(l) = &r.left_out {
+        s += &format!("   {}\n", left_out_sentence(l, &r.extended));
+    }
     for n in &r.notes {
         s += &format!("   Note: {n}\n");
     }
@@ -337,4 +341,17 @@ fn decision_words(effect: EffectKind, d: &Decision) -> String {
         Decision::Dropped => "dropped (the model no longer needs it)".into(),
         Decision::Rejected { reason } => reason.to_string(),
     }
+}
+
+/// What leaving an event's samples out did, in a sentence (the report's text and the Result's
+/// warning).
+pub fn left_out_sentence(l: &LeftOut, extended: &BaseModel) -> String {
+    format!(
+        "J and c2 are fitted without t = {:.1}–{:.1} s ({} samples), where something the model does not hold acts; with those samples J reads {:+.1} % and c2 {:+.1} %",
+        l.from_s,
+        l.to_s,
+        l.samples,
+        100.0 * (l.inertia_with / extended.inertia - 1.0),
+        100.0 * (l.c2_with / extended.c2 - 1.0)
+    )
 }

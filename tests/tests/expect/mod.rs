@@ -64,7 +64,7 @@ pub fn describe(r: &Report) -> String {
         .map(|m| format!("{}={:.4e}", m.effect, m.value))
         .collect();
     format!(
-        "{:?} [{}] ties [{}] near [{}] J {:.4e} c2 {:.4e}{} sim {:.2} → {:.2}{}",
+        "{:?} [{}] ties [{}] near [{}] J {:.4e} c2 {:.4e}{} sim {:.2} → {:.2}{}{}",
         r.verdict,
         effects.join(", "),
         ties.join(", "),
@@ -77,6 +77,12 @@ pub fn describe(r: &Report) -> String {
         r.concentration.as_ref().map_or(String::new(), |c| format!(
             " concentrated {:?} {:.1}–{:.1} s ×{:.1}",
             c.condition, c.from_s, c.to_s, c.ratio
+        )),
+        r.left_out.as_ref().map_or(String::new(), |l| format!(
+            " left out {:.1}–{:.1} s (J with it {:+.1} %)",
+            l.from_s,
+            l.to_s,
+            100.0 * (l.inertia_with / r.extended.inertia - 1.0)
         ))
     )
 }
