@@ -286,9 +286,9 @@ pub(crate) trait Candidate: Sync {
     /// the sample rate moves the load as its mean over a step does: about nothing).
     fn simulation_sees(&self) -> bool;
     /// Whether its time constant is tuned by the simulated velocity as well as the equation
-    /// (`tune`): a lag of what drives the rotor or of the force it is simulated from. A lag of
-    /// the acceleration's estimate leaves the velocity, which the simulation is scored on,
-    /// untouched: it overrides this with `false`.
+    /// (`tune`): a lag of what drives the rotor. A lag of the acceleration's estimate leaves the
+    /// velocity, which the simulation is scored on, untouched, and a force sensor's lag is the
+    /// equation's coefficient of the force's slope: both override this with `false`.
     fn tuned_by_simulation(&self) -> bool {
         self.slot() == Slot::Lag
     }
