@@ -56,47 +56,32 @@ const SEEDS: [u64; 2] = [1, 2];
 /// honestly: no verdict that the model explains the data while its J or drag is more than 2 %
 /// off.
 const KNOWN_LIMITS: &[(&str, u64, &str)] = &[
-    ("torque_lag_8ms", 1, LAG_SHORT),
-    ("torque_lag_8ms", 2, LAG_SHORT),
-    ("torque_lag_15ms", 1, LAG_UNDER_A_TERM),
-    ("torque_lag_15ms", 2, LAG_UNDER_A_TERM),
-    ("lag_offset", 1, LAG_UNDER_A_TERM),
-    ("lag_offset", 2, LAG_UNDER_A_TERM),
     ("lag_viscous", 1, LAG_UNDER_A_TERM),
     ("lag_viscous", 2, LAG_UNDER_A_TERM),
-    ("lag_coulomb_reversing", 1, LAG_UNDER_A_TERM),
-    ("lag_coulomb_reversing", 2, LAG_UNDER_A_TERM),
-    ("braking_lag", 1, LAG_UNDER_A_TERM),
-    ("braking_lag", 2, LAG_UNDER_A_TERM),
-    ("viscous", 1, SPEED_SHAPES),
     ("drag_exponent_offset", 1, SPEED_SHAPES),
     ("drag_exponent_offset", 2, SPEED_SHAPES),
     ("sensor_filter_drag_exponent", 1, SPEED_SHAPES),
     ("sensor_filter_drag_exponent", 2, SPEED_SHAPES),
     ("force_sensor_lag", 1, SENSOR_LAG),
     ("force_sensor_lag", 2, SENSOR_LAG),
+    ("force_sensor_2nd_order", 2, SENSOR_LAG),
     ("acceleration_lag", 1, SENSOR_LAG),
     ("acceleration_lag", 2, SENSOR_LAG),
 ];
 
 /// Known limits where the verdict is worse than a miss: it says the model explains the data
-/// while J or the drag is more than 2 % off (docs/SCIENCE.md says so). A 10 ms torque lag on a
-/// reversing sine beside a 5 mN·m Coulomb friction: the friction is named within 8 %, the lag is
-/// not found (see [`LAG_UNDER_A_TERM`]), and c2 reads 12 % low, with the verdict "explained".
-const SILENTLY_WRONG: &[(&str, u64)] =
-    &[("lag_coulomb_reversing", 1), ("lag_coulomb_reversing", 2)];
+/// while J or the drag is more than 2 % off (docs/SCIENCE.md would say so). None today. (Braking
+/// beside a torque lag, seed 2, was until the braking spells were located where the velocity
+/// kinks: the ±20 ms slope turned 12 ms before each step the braking makes, a timing error a
+/// viscous friction absorbed better than the lag, and J read 3.5 % high, c2 6.3 % low.)
+const SILENTLY_WRONG: &[(&str, u64)] = &[];
 
-/// A lag's nonlinear parameter is tuned by the held-out acceleration-equation error, which this
-/// stand's acceleration noise dominates: on top of a constant torque a 15 ms lag gains 0.02 % in
-/// the equation and 16 % in the simulated velocity, so the lag is tuned to 0.4 ms and the
-/// constant torque (Coulomb or offset, 14 % too large) absorbs it; J reads 4–5 % high. The cure
-/// is output-error (simulated-velocity) tuning and a criterion that does not require the
-/// equation to see a lag (select.rs, rule 4): not done.
-const LAG_UNDER_A_TERM: &str =
-    "a lag beside or mimicked by a torque term: tuned by the noise-dominated equation error";
-
-/// An 8 ms lag alone is named, but at 6.3–6.6 ms (17–22 % short) and tied with constant torques.
-const LAG_SHORT: &str = "an 8 ms lag named 17–22 % short, tied with constant torques";
+/// A torque lag beside a term that takes most of it first: a 10 ms lag beside a viscous friction
+/// on the sine (a Coulomb friction is named in the first round, beside which the lag, re-tuned,
+/// no longer passes). Each lag's time constant is tuned by both held-out errors (the simulated
+/// velocity's too) since the equation's alone, dominated by this stand's acceleration noise,
+/// tuned a 15 ms lag to 0.4 ms.
+const LAG_UNDER_A_TERM: &str = "a lag beside a torque term that absorbs it in the first round";
 
 /// ω, |ω|^p and a constant over the sine's 816–2449 rad/s: the diagnosis reports viscous and
 /// exponent as tied (the stand's ideal report does not), or names an offset for a sensor filter
@@ -104,8 +89,9 @@ const LAG_SHORT: &str = "an 8 ms lag named 17–22 % short, tied with constant t
 const SPEED_SHAPES: &str =
     "torque shapes of speed the sine's band does not separate for the selection";
 
-/// A 10 ms first-order force-sensor lag is tied with an offset or lost to one; the acceleration
-/// lag is not found.
+/// A 10 ms first-order force-sensor lag is tied with an offset (or named 15 % long); the
+/// second-order sensor stage on seed 2 is named as a 14.0 ms delay tied with an offset (gains
+/// 4.27 ± 0.07 and 4.18 ± 0.05); the acceleration lag is not found.
 const SENSOR_LAG: &str = "sensor-side lags on this stand's noise";
 
 fn repo() -> PathBuf {

@@ -179,6 +179,7 @@ pub(crate) fn run(
                     mean: f64::NAN,
                     stderr: f64::NAN,
                     folds_better: 0,
+                    rank_p: 1.0,
                 },
             ));
         effects.push(NamedEffect {
@@ -423,6 +424,7 @@ fn periodic(
         admissible,
         errors: scored.errors(),
         simulation_sees: true,
+        lag_in_samples: None,
     };
     if select::judge(&current.errors(), &evidence).is_some() {
         return None;

@@ -198,6 +198,7 @@ pub fn diagnose_rows_observed(
             mean: f64::NAN,
             stderr: f64::NAN,
             folds_better: 0,
+            rank_p: 1.0,
         };
         report.candidates.insert(
             k,

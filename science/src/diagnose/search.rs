@@ -23,7 +23,7 @@ use super::model::{Effect, Model};
 use super::select::{self, Decision, Evidence, FoldErrors, Gain, Rejection};
 use super::signals::Signals;
 use super::simulate::{fold_scores, FoldScores, SimPlan};
-use super::tune::Tuner;
+use super::tune::{objective_of, Tuner};
 use super::{Observer, Stage};
 
 /// How one effect scored when it was tried.
@@ -62,6 +62,7 @@ impl Scored {
         let cv = Cv {
             mse: scores.equation_pooled,
             folds: scores.equation,
+            simulation: Some(scores.simulation),
         };
         Some(Scored { model, scores, cv })
     }
@@ -205,6 +206,7 @@ fn try_effect(
         kind,
         parent: &parent.cv,
         seed,
+        plan,
     };
     let (effect, _) = candidate.tune(&tuner).ok_or(Rejection::NotFitted)?;
     let model = parent.model.with(effect).ok_or(Rejection::TooWide)?;
@@ -224,6 +226,12 @@ fn try_effect(
             admissible,
             errors: scored.errors(),
             simulation_sees: candidate.simulation_sees(),
+            // A lag whose value is a regression column's coefficient (a force sensor's
+            // first-order lag: the force's slope) is a term of the equation, judged like one.
+            lag_in_samples: (candidate.tuned_by_simulation() && candidate.columns(&effect) == 0)
+                .then(|| candidate.lag(&effect, estimate.value))
+                .flatten()
+                .map(|l| l.delay * s.rate),
         };
         Ok(Trial {
             effect,
@@ -245,7 +253,7 @@ fn try_effect(
     if !contender || last == 0 {
         return Ok(trial);
     }
-    let joint = retune(model.clone(), s, Some(last));
+    let joint = retune(model.clone(), s, plan, Some(last));
     if joint == model {
         return Ok(trial);
     }
@@ -288,9 +296,9 @@ fn score_of(round: usize, parent: &Scored, t: &Trial, decision: Decision) -> Can
 
 /// Re-tunes the nonlinear parameters of `m`'s effects near their values, each given the others
 /// (one sweep, in order; `skip`: an effect just tuned on the others): the joint refit of every
-/// nonlinear parameter of a model. A re-tuned parameter is kept where it lowers the held-out
-/// error.
-fn retune(m: Model, s: &Signals, skip: Option<usize>) -> Model {
+/// nonlinear parameter of a model. A re-tuned parameter is kept where it lowers what its tuning
+/// minimises (`tune`'s objective: for a lag, the simulation's error too).
+fn retune(m: Model, s: &Signals, plan: &SimPlan, skip: Option<usize>) -> Model {
     let mut model = m;
     let Some(mut cv) = cross_validate(&model, s) else {
         return model;
@@ -307,11 +315,12 @@ fn retune(m: Model, s: &Signals, skip: Option<usize>) -> Model {
             kind: e.kind,
             parent: &cv,
             seed: None,
+            plan,
         };
         let Some((next, Some(next_cv))) = e.candidate().retune(&e, &tuner) else {
             continue;
         };
-        if next_cv.mse < cv.mse {
+        if next_cv.objective() < objective_of(&tuner.cv(e)) {
             let mut m = rest;
             m.effects.insert(i, next);
             model = m;
@@ -425,6 +434,7 @@ impl Search<'_> {
                         mean: f64::NAN,
                         stderr: f64::NAN,
                         folds_better: 0,
+                        rank_p: 1.0,
                     },
                     decision: Decision::Rejected { reason },
                 }),
@@ -438,7 +448,7 @@ impl Search<'_> {
 
     /// Makes `next` (a model derived from the current one) current, re-tuned jointly.
     fn adopt(&mut self, next: Scored) {
-        let joint = retune(next.model.clone(), self.s, None);
+        let joint = retune(next.model.clone(), self.s, self.plan, None);
         self.current = if joint == next.model {
             next
         } else {
@@ -747,9 +757,10 @@ fn try_pair(
         kind,
         parent: &cv,
         seed: None,
+        plan,
     };
     let (b, _) = kind.candidate().tune(&tuner)?;
-    let both = retune(with_a.with(b)?, s, None);
+    let both = retune(with_a.with(b)?, s, plan, None);
     let n = both.effects.len();
     let fit = fit_on_all(&both, s)?;
     let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())

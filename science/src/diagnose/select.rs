@@ -23,7 +23,8 @@
 //! 2. A gain that is not positive is rejected ([`Rejection::NoGain`]).
 //! 3. A gain that is not consistent across the folds is rejected ([`Rejection::Inconsistent`]):
 //!    consistent is a mean [`SIGNIFICANT`] standard errors above zero, or better in all folds
-//!    but one (a sign test, robust where the folds differ in what they can show).
+//!    but one (a sign test), or a signed-rank test at [`RANK_LEVEL`] (both robust where the
+//!    folds differ in what they can show: [`Gain::significant`]).
 //! 4. A consistent gain below [`MIN_GAIN`] is not named: a **near miss** when it is at least
 //!    [`NEAR_MISS_GAIN`] and the simulation, which can see the effect, improves too; otherwise
 //!    rejected ([`Rejection::BelowThreshold`]). Nor is an effect whose gain is the simulation's
@@ -58,7 +59,7 @@
 //! Chosen on the tests' own draws (formula stand seed 20261122, mechanism stand generator seeds
 //! 20261123, 1, 2, 3). The independent Python stand, which played no part in choosing them, is
 //! their validation on fresh data (tests/tests/diagnose_independent.rs; docs/SCIENCE.md "The
-//! independent stand": 21 of 46 runs right, the failures not threshold effects).
+//! independent stand": 35 of 46 runs right, the failures not threshold effects).
 
 use serde::Serialize;
 
@@ -98,7 +99,51 @@ pub struct Gain {
     pub stderr: f64,
     /// Folds in which B does better.
     pub folds_better: usize,
+    /// One-sided p-value of Wilcoxon's signed-rank test that B does no better (exact, over the
+    /// folds where the two differ; 1 where they never do).
+    #[serde(skip)]
+    pub rank_p: f64,
 }
+
+/// Exact one-sided p-value of Wilcoxon's signed-rank test on `d` (H₀: symmetric about zero,
+/// against a positive shift): the share of the 2^m sign assignments to the m non-zero |d|'s
+/// ranks (mid-ranks for ties) whose positive rank sum reaches the observed one.
+fn signed_rank_p(d: &[f64; FOLDS]) -> f64 {
+    let mut nonzero: Vec<f64> = d.iter().copied().filter(|x| *x != 0.0).collect();
+    let m = nonzero.len();
+    if m == 0 || nonzero.iter().any(|x| x.is_nan()) {
+        return 1.0;
+    }
+    nonzero.sort_by(|a, b| a.abs().total_cmp(&b.abs()));
+    // Ranks doubled (mid-ranks of ties are halves): integers.
+    let mut ranks = vec![0u32; m];
+    let mut i = 0;
+    while i < m {
+        let mut j = i;
+        while j + 1 < m && nonzero[j + 1].abs() == nonzero[i].abs() {
+            j += 1;
+        }
+        for r in &mut ranks[i..=j] {
+            *r = (i + j + 2) as u32;
+        }
+        i = j + 1;
+    }
+    let observed: u32 = (0..m).filter(|&k| nonzero[k] > 0.0).map(|k| ranks[k]).sum();
+    let at_least = (0u32..1 << m)
+        .filter(|signs| {
+            (0..m)
+                .filter(|&k| signs & (1 << k) != 0)
+                .map(|k| ranks[k])
+                .sum::<u32>()
+                >= observed
+        })
+        .count();
+    at_least as f64 / (1u32 << m) as f64
+}
+
+/// The signed-rank test's one-sided level for a consistent gain: with ten folds, the positive
+/// folds' ranks sum to at least 50 of 55 (p = 0.98 %).
+pub const RANK_LEVEL: f64 = 0.01;
 
 fn ln_ratio(a: f64, b: f64) -> f64 {
     if a == b {
@@ -124,6 +169,7 @@ impl Gain {
             mean,
             stderr: (var / n).sqrt(),
             folds_better: d.iter().filter(|x| **x > 0.0).count(),
+            rank_p: signed_rank_p(&d),
         }
     }
 
@@ -151,12 +197,20 @@ impl Gain {
     }
 
     /// Whether the gain is consistent across the folds: its mean stands [`SIGNIFICANT`] standard
-    /// errors above zero, or it is positive and better in all folds but one at most (a sign test:
-    /// one-sided p = 1.1 % for ten folds). The second counts where the folds differ in what they
-    /// can show (a chirp's slow start, a record's transient), which inflates the spread of a
-    /// gain that every fold agrees on.
+    /// errors above zero, or it is positive and a distribution-free test of the folds says so:
+    /// better in all folds but one at most (the sign test: one-sided p = 1.1 % for ten folds), or
+    /// Wilcoxon's signed-rank test at one-sided [`RANK_LEVEL`]. These count where the folds
+    /// differ in what they can show (a chirp's slow start, a record's transient), which inflates
+    /// the spread of a gain the folds agree on. The sign test ignores how much each fold gains or
+    /// loses, so one large loss does not sink a gain nine folds show; the rank test weighs a fold
+    /// by the size of its change, so two folds lost by slivers do not sink it either. (With the
+    /// sign test alone, a Coulomb and a viscous friction the data cannot tell apart on a 100 Hz
+    /// chirp, gains 0.895 ± 0.396 and 0.899 ± 0.400, were decided between by the count of folds
+    /// each won, 9 of 10 against 8 of 10: the viscous term's two lost folds were its two smallest
+    /// changes.)
     pub fn significant(&self) -> bool {
-        self.mean > SIGNIFICANT * self.stderr || (self.mean > 0.0 && self.folds_better + 1 >= FOLDS)
+        self.mean > SIGNIFICANT * self.stderr
+            || (self.mean > 0.0 && (self.folds_better + 1 >= FOLDS || self.rank_p <= RANK_LEVEL))
     }
 }
 
@@ -206,6 +260,14 @@ pub struct Evidence {
     pub errors: FoldErrors,
     /// Whether the simulation can see it.
     pub simulation_sees: bool,
+    /// For a lag whose time constant is tuned by both held-out errors (`tune`), its delay in
+    /// sample periods; `None` for a term (or a lag that enters the equation as a column). A lag is a phase, which the simulation integrates over
+    /// seconds while the equation sees it only against the acceleration's noise, and no constant
+    /// bias the simulation could integrate: longer than a sample period the equation need not
+    /// gain by itself ([`Rejection::EquationSilent`]). Shorter, the simulation alone cannot
+    /// place it: the samples' own timing (a velocity read over its sample period, inputs
+    /// interpolated between samples, timestamps' jitter) moves it by as much.
+    pub lag_in_samples: Option<f64>,
 }
 
 /// Why an effect was not named.
@@ -315,7 +377,8 @@ pub fn judge(parent: &FoldErrors, e: &Evidence) -> Option<Decision> {
         return Some(Decision::rejected(Rejection::Inconsistent));
     }
     let (equation, _) = Gain::parts(parent, &e.errors);
-    if equation.mean < NEAR_MISS_GAIN {
+    let simulation_places_it = e.lag_in_samples.is_some_and(|n| n > 1.0);
+    if equation.mean < NEAR_MISS_GAIN && !simulation_places_it {
         return Some(Decision::rejected(Rejection::EquationSilent));
     }
     if gain.mean < MIN_GAIN {
@@ -370,6 +433,7 @@ pub fn forward(parent: &FoldErrors, trials: &[Evidence]) -> Step {
             tied.push(i);
         }
     }
+
     // Rule 6: the simplest of the tied class is named.
     let named = *tied
         .iter()
@@ -487,6 +551,7 @@ mod tests {
             admissible: Ok(()),
             errors: errors(eq, sim),
             simulation_sees: true,
+            lag_in_samples: None,
         }
     }
 
@@ -547,6 +612,26 @@ mod tests {
         );
     }
 
+    /// Wilcoxon's signed-rank test against its table for ten pairs: W− ≤ 5 has p = 10/1024,
+    /// W− ≤ 6 has 14/1024; nothing to compare, p = 1.
+    #[test]
+    fn the_signed_rank_test_matches_its_table() {
+        let d = |losing: &[usize]| -> [f64; FOLDS] {
+            core::array::from_fn(|k| {
+                let size = (k + 1) as f64;
+                if losing.contains(&(k + 1)) {
+                    -size
+                } else {
+                    size
+                }
+            })
+        };
+        assert_eq!(signed_rank_p(&d(&[])), 1.0 / 1024.0);
+        assert_eq!(signed_rank_p(&d(&[5])), 10.0 / 1024.0);
+        assert_eq!(signed_rank_p(&d(&[2, 4])), 14.0 / 1024.0);
+        assert_eq!(signed_rank_p(&[0.0; FOLDS]), 1.0);
+    }
+
     #[test]
     fn rule_3_a_gain_the_folds_disagree_on_is_rejected() {
         // Large in two folds, worse in the others.
@@ -570,19 +655,40 @@ mod tests {
         let g = Gain::of(&parent(), &e.errors);
         assert!(g.mean < SIGNIFICANT * g.stderr, "{g:?}");
         assert_eq!(judge(&parent(), &e), None);
-        // Worse in two folds: inconsistent.
+        // Worse in two folds, each by more than five other folds gain: inconsistent.
         let eq: [f64; FOLDS] = core::array::from_fn(|k| match k {
             0..3 => 0.02,
-            3 | 4 => 1.05,
+            3 | 4 => 1.3,
             _ => 0.95,
         });
         let e = evidence(TorqueLag, eq, flat(1.0));
+        let g = Gain::of(&parent(), &e.errors);
+        assert!(
+            g.mean < SIGNIFICANT * g.stderr && g.rank_p > RANK_LEVEL,
+            "{g:?}"
+        );
         assert_eq!(
             judge(&parent(), &e),
             Some(Decision::Rejected {
                 reason: Rejection::Inconsistent
             })
         );
+        // Worse in two folds by less than any other fold gains (the 100 Hz chirp's viscous
+        // friction beside a lag): the signed-rank test finds it consistent (p = 0.4 %).
+        let eq: [f64; FOLDS] = core::array::from_fn(|k| match k {
+            0..3 => 0.02,
+            3 | 4 => 1.01,
+            _ => 0.95,
+        });
+        let e = evidence(TorqueLag, eq, flat(1.0));
+        let g = Gain::of(&parent(), &e.errors);
+        assert!(
+            g.mean < SIGNIFICANT * g.stderr && g.folds_better == 8,
+            "{g:?}"
+        );
+        // Ranks with ties: the two losses share 1.5, five folds 5, three 9; W− = 3.
+        assert_eq!(g.rank_p, 4.0 / 1024.0, "{g:?}");
+        assert_eq!(judge(&parent(), &e), None);
     }
 
     #[test]

@@ -12,7 +12,7 @@
 
 use std::ops::Range;
 
-use super::engine::cross_fit;
+use super::engine::{cross_fit, cross_fit_for_tuning, CrossFit, Cv};
 use super::model::{Model, Prepared, Speed, MAX_COLUMNS};
 use super::signals::Signals;
 use super::FOLDS;
@@ -78,11 +78,33 @@ pub(crate) struct FoldScores {
 pub(crate) fn fold_scores(model: &Model, s: &Signals, plan: &SimPlan) -> Option<FoldScores> {
     let p = model.prepare(s);
     let cf = cross_fit(model, &p, s)?;
+    Some(scores_of(model, &p, &cf, s, plan))
+}
+
+/// The held-out scores a tuning reads, the simulation's included: the equation's on the rows a
+/// tuning reads, each fold simulated with the parameters fitted on those rows of the others.
+pub(crate) fn tuning_scores(model: &Model, s: &Signals, plan: &SimPlan) -> Option<Cv> {
+    let p = model.prepare(s);
+    let cf = cross_fit_for_tuning(model, &p, s)?;
+    let scores = scores_of(model, &p, &cf, s, plan);
+    Some(Cv {
+        simulation: Some(scores.simulation),
+        ..cf.cv
+    })
+}
+
+fn scores_of(
+    model: &Model,
+    p: &Prepared,
+    cf: &CrossFit,
+    s: &Signals,
+    plan: &SimPlan,
+) -> FoldScores {
     let mut simulation = [0.0; FOLDS];
     for (k, windows) in plan.windows.iter().enumerate() {
         let (mut sum, mut count) = (0.0, 0usize);
         for w in windows {
-            let v = simulate(model, &p, &cf.thetas[k], s, w.clone());
+            let v = simulate(model, p, &cf.thetas[k], s, w.clone());
             sum += v
                 .iter()
                 .zip(&s.velocity[w.clone()])
@@ -92,11 +114,11 @@ pub(crate) fn fold_scores(model: &Model, s: &Signals, plan: &SimPlan) -> Option<
         }
         simulation[k] = sum / count.max(1) as f64;
     }
-    Some(FoldScores {
+    FoldScores {
         equation: cf.cv.folds,
         simulation,
         equation_pooled: cf.cv.mse,
-    })
+    }
 }
 
 /// Samples simulated (a profiling count).

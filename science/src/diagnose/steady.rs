@@ -152,6 +152,7 @@ pub fn drag_law(s: &Signals) -> Option<DragLaw> {
         admissible: admissible_measured(kind, estimate),
         errors: errors(&free),
         simulation_sees: false,
+        lag_in_samples: None,
     };
     let decision = judge(&errors(&seed), &evidence).unwrap_or(Decision::Named);
     Some(DragLaw {

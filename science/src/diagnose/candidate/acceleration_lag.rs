@@ -14,7 +14,7 @@ use super::{EffectKind,
 };
 use crate::diagnose::model::{At, Effect, LagForm, Lag, Prepared, impulse_gain};
 use crate::diagnose::signals::{first_order_lag, Signals};
-use crate::diagnose::tune::{mse_of, Tuned, Tuner};
+use crate::diagnose::tune::{objective_of, Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
 
 /// See the module documentation.
@@ -80,9 +80,9 @@ impl Candidate for AccelerationLag {
         ]
         .into_iter()
         .filter_map(|form| t.grid_then_golden(&lag_grid(), |x| Effect::with_form(t.kind, x, form)))
-        .min_by(|a, b| mse_of(&a.1).total_cmp(&mse_of(&b.1)));
+        .min_by(|a, b| objective_of(&a.1).total_cmp(&objective_of(&b.1)));
         Some(match best {
-            Some(b) if mse_of(&b.1) < mse_of(&slope_cv) => b,
+            Some(b) if objective_of(&b.1) < objective_of(&slope_cv) => b,
             _ => (slope, slope_cv),
         })
     }
@@ -121,6 +121,9 @@ impl Candidate for AccelerationLag {
     }
     fn simulation_sees(&self) -> bool {
         true
+    }
+    fn tuned_by_simulation(&self) -> bool {
+        false
     }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None

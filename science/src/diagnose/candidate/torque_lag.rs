@@ -17,7 +17,7 @@ use super::{EffectKind,
 };
 use crate::diagnose::model::{At, Effect, LagForm, Lag, Prepared, impulse_gain};
 use crate::diagnose::signals::{first_order_lag, Signals};
-use crate::diagnose::tune::{mse_of, Tuned, Tuner};
+use crate::diagnose::tune::{objective_of, Tuned, Tuner};
 use crate::diagnose::SeparatingRun;
 
 /// See the module documentation.
@@ -70,7 +70,7 @@ impl Candidate for TorqueLag {
             in_form(LagForm::FirstOrder),
             in_form(LagForm::FirstOrderStepsAtSamples),
         ) {
-            (Some(a), Some(b)) => Some(if mse_of(&b.1) < mse_of(&a.1) { b } else { a }),
+            (Some(a), Some(b)) => Some(if objective_of(&b.1) < objective_of(&a.1) { b } else { a }),
             (a, b) => a.or(b),
         }
     }
