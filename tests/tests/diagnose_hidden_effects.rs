@@ -62,6 +62,7 @@ fn run(config: &StandConfig, rng: &mut StdRng) -> Report {
 fn truth(c: &StandConfig, s: f64) -> Truth {
     Truth {
         inertia: c.inertia,
+        c1: c.c1,
         k: c.c2,
         p: c.drag_exponent,
         speed: (s * c.max_torque / c.c2).powf(1.0 / c.drag_exponent),
@@ -438,6 +439,12 @@ fn pairs(rng: &mut StdRng, pattern: Pattern) -> Vec<Pair> {
 
 /// What is wrong with the diagnosis of `pair` (empty: right).
 fn check_pair(pair: &Pair, seed: u64) -> Vec<String> {
+    diagnose_pair(pair, seed).1
+}
+
+/// The diagnosis of `pair`, what is wrong with it (empty: right), and whether it is silently
+/// wrong (says the model explains the data while J or the drag is more than 2 % off).
+fn diagnose_pair(pair: &Pair, seed: u64) -> (Report, Vec<String>, bool) {
     let c = &pair.config;
     let r = diagnose(&simulate(*c, &pair.excitation, seed), Options::default()).unwrap();
     let mid = 0.5 * (pair.excitation.lo.max(0.1) + pair.excitation.hi);
@@ -447,16 +454,22 @@ fn check_pair(pair: &Pair, seed: u64) -> Vec<String> {
         Ties::Only(&pair.ties),
         Some(truth(c, mid)),
     );
+    let silent = matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
+        && !judge_fit(&r, truth(c, mid)).is_empty();
     say(format!(
         "  {:<30} {:?} {} Hz: {} {}",
         pair.name,
         pair.excitation.pattern,
         c.rate,
         describe(&r),
-        if bad.is_empty() { "ok" } else { "WRONG" }
+        if bad.is_empty() {
+            "ok".to_string()
+        } else {
+            format!("WRONG: {}", bad.join("; "))
+        }
     ));
     verbose(&r);
-    bad
+    (r, bad, silent)
 }
 
 /// The two-effect cases on `pattern` drawn from generator seed `seed`: what is wrong with each.
@@ -490,14 +503,64 @@ fn two_effects_at_once_are_found_jointly_on_a_chirp() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The same pairs on the seed's sine: what diagnose gets right and wrong there (docs/SCIENCE.md,
-/// "What it still cannot find": one 0.5 Hz sinusoid spans a lag, a constant and the torque
-/// shapes with the same few harmonics). Prints a table; asserts nothing.
+/// Pairs the seed's sine does not get right today (docs/SCIENCE.md, "Two effects at once on the
+/// seed's sine"), by name and generator seed, with why. Each must still end honestly.
+const SINE_PAIR_LIMITS: &[(&str, u64, &str)] = &[
+    ("lag + viscous", 20261201, LAG_TAKEN),
+    ("lag + viscous", 20261202, LAG_TAKEN),
+    ("drag exponent + offset", 20261201, SHAPES_TRADED),
+    ("sensor filter + drag exponent", 20261201, SHAPES_TRADED),
+    ("sensor filter + drag exponent", 20261202, SHAPES_TRADED),
+];
+
+/// A constant torque named in the first round takes most of the lag's effect on one sinusoid;
+/// the lag, re-tuned on top of it, no longer passes (as on the independent stand's
+/// `lag_viscous`). The verdict is ambiguous.
+const LAG_TAKEN: &str = "a constant torque takes the lag beside a viscous term";
+
+/// Over the sine's band of speeds a constant, ω and ω^p (and, beside a sensor filter, the
+/// filter's length) trade against each other: the exponent or the filter is named off by more
+/// than 10 %, beside a torque shape that is not there.
+const SHAPES_TRADED: &str = "torque shapes traded over the sine's band of speeds";
+
+/// The same pairs on the seed's sine, on two draws, where one 0.5 Hz sinusoid spans a lag, a
+/// constant and the torque shapes with the same few harmonics: every pair right (both named within
+/// 10 %, or tied only as the chirp's pairs may be, J and the drag within 2 %) except those in
+/// [`SINE_PAIR_LIMITS`], and those never silently wrong. The test fails when a listed pair becomes
+/// right, so the list and the docs cannot drift.
 #[test]
-#[ignore = "an exploration aid: the seed's sine cannot separate every pair; prints, asserts nothing"]
 fn two_effects_at_once_on_the_seeds_sine() {
-    let failures = two_effects(20261201, Pattern::Sine);
-    say(failures.join("\n"));
+    let mut failures = Vec::new();
+    for seed in [20261201u64, 20261202] {
+        say(format!(
+            "two effects at once on the seed's sine (rng seed {seed}):"
+        ));
+        let mut rng = StdRng::seed_from_u64(seed);
+        for pair in pairs(&mut rng, Pattern::Sine) {
+            let sim_seed = rng.random();
+            let (_, bad, silent) = diagnose_pair(&pair, sim_seed);
+            let limit = SINE_PAIR_LIMITS
+                .iter()
+                .any(|&(n, s, _)| n == pair.name && s == seed);
+            match (bad.is_empty(), limit) {
+                (true, true) => failures.push(format!(
+                    "{} (seed {seed}): right now; take it off SINE_PAIR_LIMITS and the docs",
+                    pair.name
+                )),
+                (false, false) => {
+                    failures.push(format!("{} (seed {seed}): {}", pair.name, bad.join("; ")))
+                }
+                _ => {}
+            }
+            if silent {
+                failures.push(format!(
+                    "{} (seed {seed}): says the model explains the data while J or the drag is off",
+                    pair.name
+                ));
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// The effect added as one new file: a second-order stage between the commanded torque and

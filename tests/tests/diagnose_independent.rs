@@ -119,6 +119,9 @@ fn truth_of(truth: &Value) -> Truth {
     let full_scale = truth["rotor"]["full_scale_torque_Nm"].as_f64().unwrap();
     Truth {
         inertia: ideal["J"].as_f64().unwrap(),
+        c1: ideal["effects"]["viscous_friction"]["value"]
+            .as_f64()
+            .unwrap_or(0.0),
         k,
         p,
         speed: (0.5 * full_scale / k).powf(1.0 / p),

@@ -100,6 +100,7 @@ fn truth(s: &Scenario) -> Truth {
     let mid = 0.5 * (s.bench.lo.max(0.1) + s.bench.hi) * s.bench.base.drive.max_torque;
     Truth {
         inertia: s.fit.inertia,
+        c1: s.config.rotor.bearing.viscous,
         k,
         p,
         speed: (mid / k).powf(1.0 / p),

@@ -87,14 +87,24 @@ pub fn describe(r: &Report) -> String {
     )
 }
 
-/// The truth of a stand: its J and its drag law k·|ω|^p, compared by the drag torque at `speed`
-/// (inside the data: k alone is the torque at 1 rad/s, far below them).
+/// The truth of a stand: its J and its speed-dependent torque c1·ω + k·|ω|^p, compared at `speed`
+/// (inside the data: k alone is the torque at 1 rad/s, far below them). The viscous term counts
+/// on both sides: over a narrow band of speeds c1·ω + c2·ω² and k·ω^p are one curve, and a model
+/// that names one for the other has the torque right even where it has the wrong name.
 #[derive(Clone, Copy, Debug)]
 pub struct Truth {
     pub inertia: f64,
+    pub c1: f64,
     pub k: f64,
     pub p: f64,
     pub speed: f64,
+}
+
+impl Truth {
+    /// The speed-dependent torque at `self.speed` of a law c1·ω + k·ω^p.
+    fn drag(&self, c1: f64, k: f64, p: f64) -> f64 {
+        c1 * self.speed + k * self.speed.powf(p)
+    }
 }
 
 /// One model a report gives: the extended one, or one where an ambiguous effect stands in place
@@ -103,6 +113,7 @@ pub struct Truth {
 struct Reading {
     effects: Vec<(EffectKind, f64)>,
     inertia: f64,
+    c1: f64,
     k: f64,
     p: f64,
 }
@@ -116,6 +127,7 @@ fn readings(r: &Report) -> Vec<Reading> {
     let mut out = vec![Reading {
         effects: r.effects.iter().map(|e| (e.effect, e.value)).collect(),
         inertia: r.extended.inertia,
+        c1: r.extended.c1,
         k,
         p,
     }];
@@ -136,6 +148,7 @@ fn readings(r: &Report) -> Vec<Reading> {
         out.push(Reading {
             effects,
             inertia: a.alternative.inertia,
+            c1: a.alternative.c1,
             k,
             p,
         });
@@ -210,11 +223,11 @@ fn judge_reading(m: &Reading, expected: &[Expected], truth: Option<Truth>) -> Ve
         }
     }
     if let Some(t) = truth {
-        let drag = m.k * t.speed.powf(m.p) / (t.k * t.speed.powf(t.p));
+        let drag = t.drag(m.c1, m.k, m.p) / t.drag(t.c1, t.k, t.p);
         if !((m.inertia / t.inertia - 1.0).abs() <= 0.02 && (drag - 1.0).abs() <= 0.02) {
             bad.push(format!(
-                "extended J {:.4e} (truth {:.4e}), drag {:.4e}·|ω|^{:.4} (truth {:.4e}·|ω|^{:.4}: {:+.1} % at {:.0} rad/s)",
-                m.inertia, t.inertia, m.k, m.p, t.k, t.p, (drag - 1.0) * 100.0, t.speed
+                "extended J {:.4e} (truth {:.4e}), drag {:.3e}·ω + {:.4e}·|ω|^{:.4} (truth {:.3e}·ω + {:.4e}·|ω|^{:.4}: {:+.1} % at {:.0} rad/s)",
+                m.inertia, t.inertia, m.c1, m.k, m.p, t.c1, t.k, t.p, (drag - 1.0) * 100.0, t.speed
             ));
         }
     }
@@ -247,14 +260,14 @@ pub fn judge(r: &Report, expected: &[Expected], ties: Ties, truth: Option<Truth>
 pub fn judge_fit(r: &Report, truth: Truth) -> Vec<String> {
     let m = &readings(r)[0];
     let t = truth;
-    let drag = m.k * t.speed.powf(m.p) / (t.k * t.speed.powf(t.p));
+    let drag = t.drag(m.c1, m.k, m.p) / t.drag(t.c1, t.k, t.p);
     if (m.inertia / t.inertia - 1.0).abs() > 0.02
         || (drag - 1.0).abs() > 0.02
         || !m.inertia.is_finite()
     {
         vec![format!(
-            "extended J {:.4e} (truth {:.4e}), drag {:.4e}·|ω|^{:.4} (truth {:.4e}·|ω|^{:.4}: {:+.1} % at {:.0} rad/s)",
-            m.inertia, t.inertia, m.k, m.p, t.k, t.p, (drag - 1.0) * 100.0, t.speed
+            "extended J {:.4e} (truth {:.4e}), drag {:.3e}·ω + {:.4e}·|ω|^{:.4} (truth {:.3e}·ω + {:.4e}·|ω|^{:.4}: {:+.1} % at {:.0} rad/s)",
+            m.inertia, t.inertia, m.c1, m.k, m.p, t.c1, t.k, t.p, (drag - 1.0) * 100.0, t.speed
         )]
     } else {
         Vec::new()
