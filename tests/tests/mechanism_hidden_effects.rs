@@ -579,21 +579,83 @@ fn combined(
 /// within 2 % of what the data hold.
 #[test]
 fn two_mechanisms_at_once_are_found_jointly_on_a_chirp() {
-    let failures = two_mechanisms(20261202, Pattern::Chirp);
+    let failures: Vec<String> = two_mechanisms(20261202, Pattern::Chirp)
+        .into_iter()
+        .flat_map(|o| o.wrong)
+        .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The same on the seed's sine: a table of what diagnose gets right and wrong there; asserts
-/// nothing.
+/// Pairs the seed's sine does not get right on the mechanism stand (docs/SCIENCE.md, "Two
+/// effects at once"), with why. Each must still end honestly.
+const SINE_PAIR_LIMITS: &[(&str, &str)] = &[
+    (
+        "lag + offset",
+        "a 17 ms current-sense filter and a 6.8 mN·m offset at 100 Hz: viscous friction alone passes first (gain 8.29 ± 0.21), and then neither the filter nor the offset passes alone on top of it; the search tries a pair only where no single effect passes",
+    ),
+    (
+        "lag + viscous",
+        "a constant torque named first takes the lag (as on the formula and independent stands)",
+    ),
+    (
+        "lag + coulomb, reversing",
+        "on a reversing sine at 1000 Hz a braking torque and an offset are named for the lag and the friction",
+    ),
+    (
+        "sensor filter + drag exponent",
+        "the filter named 25 % short beside the right exponent (over the sine's band they trade)",
+    ),
+];
+
+/// Pairs of [`SINE_PAIR_LIMITS`] that are worse than a miss: the verdict says the model explains
+/// the data while J or the drag is more than 2 % off. `lag + offset`: viscous friction named
+/// alone, J 4.8 % low, said explained. The test fails when one of them stops being silent (or
+/// another starts), so the docs cannot drift.
+const SINE_SILENTLY_WRONG: &[&str] = &["lag + offset"];
+
+/// The same pairs on the seed's sine: every pair right except those in [`SINE_PAIR_LIMITS`], and
+/// none silently wrong (the model said to explain the data while J or the drag is more than 2 %
+/// off) but those in [`SINE_SILENTLY_WRONG`]. The test fails when a listed pair becomes right.
 #[test]
-#[ignore = "an exploration aid: the seed's sine cannot separate every pair; prints, asserts nothing"]
 fn two_mechanisms_at_once_on_the_seeds_sine() {
-    say(two_mechanisms(20261202, Pattern::Sine).join("\n"));
+    let mut failures = Vec::new();
+    for o in two_mechanisms(20261202, Pattern::Sine) {
+        let limit = SINE_PAIR_LIMITS.iter().any(|&(n, _)| n == o.name);
+        match (o.wrong.is_empty(), limit) {
+            (true, true) => failures.push(format!(
+                "{}: right now; take it off SINE_PAIR_LIMITS and the docs",
+                o.name
+            )),
+            (false, false) => failures.extend(o.wrong),
+            _ => {}
+        }
+        if o.silent != SINE_SILENTLY_WRONG.contains(&o.name) {
+            failures.push(format!(
+                "{}: {}",
+                o.name,
+                if o.silent {
+                    "says the model explains the data while J or the drag is off"
+                } else {
+                    "no longer silently wrong: take it off SINE_SILENTLY_WRONG and the docs"
+                }
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-/// The pairs of mechanisms on pattern `p`, drawn from generator seed `seed`: what is wrong with
-/// each.
-fn two_mechanisms(seed: u64, p: Pattern) -> Vec<String> {
+/// How one pair of mechanisms was diagnosed.
+struct PairOutcome {
+    name: &'static str,
+    /// What is wrong (empty: right).
+    wrong: Vec<String>,
+    /// Whether the verdict says the model explains the data while J or the drag is off.
+    silent: bool,
+}
+
+/// The pairs of mechanisms on pattern `p`, drawn from generator seed `seed`: how each was
+/// diagnosed.
+fn two_mechanisms(seed: u64, p: Pattern) -> Vec<PairOutcome> {
     say(format!(
         "two mechanisms at once on the {p:?} (rng seed {seed}):"
     ));
@@ -640,7 +702,7 @@ fn two_mechanisms(seed: u64, p: Pattern) -> Vec<String> {
             0.1,
         ),
     ];
-    let mut failures = Vec::new();
+    let mut outcomes = Vec::new();
     {
         for (name, a, b, lo) in pairs {
             let rate = [100.0, 250.0, 500.0, 1000.0][rng.random_range(0..4)];
@@ -670,16 +732,26 @@ fn two_mechanisms(seed: u64, p: Pattern) -> Vec<String> {
                     .collect::<Vec<_>>()
                     .join(", "),
                 describe(&r),
-                if bad.is_empty() { "ok" } else { "WRONG" }
+                if bad.is_empty() {
+                    "ok".to_string()
+                } else {
+                    format!("WRONG: {}", bad.join("; "))
+                }
             ));
             verbose(&r);
-            failures.extend(
-                bad.into_iter()
-                    .map(|b| format!("{name} {p_name} {rate} Hz: {b}")),
-            );
+            let silent = matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
+                && !judge_fit(&r, truth(&s)).is_empty();
+            outcomes.push(PairOutcome {
+                name,
+                wrong: bad
+                    .into_iter()
+                    .map(|b| format!("{name} {p_name} {rate} Hz: {b}"))
+                    .collect(),
+                silent,
+            });
         }
     }
-    failures
+    outcomes
 }
 
 /// A load transient — a raised-cosine bump of 4 mN·m for 3 s, its peak ten times the reported
