@@ -591,7 +591,7 @@ fn two_mechanisms_at_once_are_found_jointly_on_a_chirp() {
 const SINE_PAIR_LIMITS: &[(&str, &str)] = &[
     (
         "lag + offset",
-        "a 17 ms current-sense filter and a 6.8 mN·m offset at 100 Hz: viscous friction alone passes first (gain 8.29 ± 0.21), and then neither the filter nor the offset passes alone on top of it; the search tries a pair only where no single effect passes",
+        "a 17 ms current-sense filter and a 6.8 mN·m offset at 100 Hz: viscous friction alone passes first (gain 8.29 ± 0.21), and then neither the filter nor the offset passes alone on top of it, nor the two together: the pair would have to replace the viscous term",
     ),
     (
         "lag + viscous",
