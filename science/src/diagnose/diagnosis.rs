@@ -220,33 +220,28 @@ pub(crate) fn run(
         .flatten();
     let held_out = held_out_residuals(&model, s);
     let concentration = held_out.as_ref().and_then(|r| concentration(s, r));
-    let left_out = if s.excluded.is_empty() {
-        // Where the concentration is an event in time: its span, which the diagnosis then
-        // leaves out of every fit and score (`super::diagnose_complete` runs it again).
+    // Where the concentration is an event in time: its span, which `super::diagnose_complete`
+    // then leaves out of every fit and score in a second diagnosis (this one, when `s.excluded`
+    // is set), and what its samples do to the model.
+    let span = if s.excluded.is_empty() {
         held_out
             .as_ref()
             .zip(concentration.as_ref())
             .and_then(|(r, c)| event_span(s, r, c))
-            .map(|w| LeftOut {
-                from_s: s.t[w.start],
-                to_s: s.t[w.end - 1],
-                samples: w.len(),
-                inertia_with: extended.inertia,
-                c2_with: extended.c2,
-            })
     } else {
-        // Left out: what its samples would have done to the model.
-        fit_every_row(&model, s).map(|f| {
-            let with = base_model_of(&f, &model, s);
-            LeftOut {
-                from_s: s.t[s.excluded.start],
-                to_s: s.t[s.excluded.end - 1],
-                samples: s.excluded.len(),
-                inertia_with: with.inertia,
-                c2_with: with.c2,
-            }
-        })
+        Some(s.excluded.clone())
     };
+    let left_out = span.and_then(|w| {
+        let with = base_model_of(&fit_every_row(&model, s)?, &model, s);
+        Some(LeftOut {
+            from_s: s.t[w.start],
+            to_s: s.t[w.end - 1],
+            samples: w.len(),
+            rows: w,
+            inertia_with: with.inertia,
+            c2_with: with.c2,
+        })
+    });
     drop(held_out);
     let mut unidentified = Unidentified::of(&extended);
     // Errors in the regressor: the torque's noise biases J beyond what its standard error says.

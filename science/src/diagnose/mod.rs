@@ -284,9 +284,13 @@ fn diagnose_complete(
     let mut first = diagnosis::run(&signals, options, progress);
     // An event in time the model does not hold (a load transient): diagnosed again without its
     // samples, so that neither the search nor the fit reads them.
-    if let Some(l) = first.as_ref().ok().and_then(|r| r.left_out.clone()) {
-        let from = signals.t.partition_point(|&t| t < l.from_s);
-        signals.excluded = from..from + l.samples;
+    if let Some(rows) = first
+        .as_ref()
+        .ok()
+        .and_then(|r| r.left_out.as_ref())
+        .map(|l| l.rows.clone())
+    {
+        signals.excluded = rows;
         first = diagnosis::run(&signals, options, progress);
     }
     let report = match first {

@@ -65,6 +65,9 @@ pub struct LeftOut {
     pub to_s: f64,
     /// Samples left out.
     pub samples: usize,
+    /// Their indices in the signals (what the second diagnosis excludes).
+    #[serde(skip)]
+    pub(crate) rows: Range<usize>,
     /// J fitted with them [kg·m²].
     pub inertia_with: f64,
     /// c2 (or its quadratic equivalent) fitted with them [N·m·s²/rad²].
