@@ -173,15 +173,7 @@ pub(crate) fn run(
             .iter()
             .find(|(k, _, _)| *k == e.kind)
             .map(|(_, c, g)| (*c, *g))
-            .unwrap_or((
-                f64::NAN,
-                select::Gain {
-                    mean: f64::NAN,
-                    stderr: f64::NAN,
-                    folds_better: 0,
-                    rank_p: 1.0,
-                },
-            ));
+            .unwrap_or((f64::NAN, select::Gain::NONE));
         effects.push(NamedEffect {
             effect: e.kind,
             value: v.value,

@@ -194,12 +194,6 @@ pub fn diagnose_rows_observed(
         return Ok(report);
     }
     for (k, m) in measured.iter().enumerate() {
-        let no_gain = Gain {
-            mean: f64::NAN,
-            stderr: f64::NAN,
-            folds_better: 0,
-            rank_p: 1.0,
-        };
         report.candidates.insert(
             k,
             CandidateScore {
@@ -209,7 +203,7 @@ pub fn diagnose_rows_observed(
                 stderr: m.estimate.stderr,
                 cv_gain_percent: f64::NAN,
                 simulation_gain_percent: f64::NAN,
-                gain: no_gain,
+                gain: Gain::NONE,
                 decision: m.decision,
             },
         );
@@ -224,7 +218,7 @@ pub fn diagnose_rows_observed(
                     stderr: m.estimate.stderr,
                     gain_percent: f64::NAN,
                     cv_gain_percent: f64::NAN,
-                    gain: no_gain,
+                    gain: Gain::NONE,
                     lag_form: None,
                     lag_delay_s: None,
                     explanation: m.kind.candidate().explanation(&e, m.estimate.value),

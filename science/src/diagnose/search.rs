@@ -430,12 +430,7 @@ impl Search<'_> {
                     stderr: f64::NAN,
                     cv_gain_percent: f64::NAN,
                     simulation_gain_percent: f64::NAN,
-                    gain: Gain {
-                        mean: f64::NAN,
-                        stderr: f64::NAN,
-                        folds_better: 0,
-                        rank_p: 1.0,
-                    },
+                    gain: Gain::NONE,
                     decision: Decision::Rejected { reason },
                 }),
                 Err(_) => {}

@@ -153,6 +153,15 @@ fn ln_ratio(a: f64, b: f64) -> f64 {
 }
 
 impl Gain {
+    /// No comparison was made (an effect measured from the rows, or not fitted): every figure
+    /// unknown.
+    pub const NONE: Gain = Gain {
+        mean: f64::NAN,
+        stderr: f64::NAN,
+        folds_better: 0,
+        rank_p: 1.0,
+    };
+
     /// What `after` gains over `before`, fold by fold.
     pub fn of(before: &FoldErrors, after: &FoldErrors) -> Gain {
         let d: [f64; FOLDS] = core::array::from_fn(|k| {
