@@ -13,7 +13,10 @@
 
 mod expect;
 
-use expect::{describe, judge, judge_fit, say, verbose, Expected, Ties, Truth, CONSTANT_TWINS};
+use expect::{
+    against_ledger, describe, judge, judge_fit, say, silently_wrong, verbose, Expected, Ties,
+    Truth, CONSTANT_TWINS,
+};
 use propid_science::diagnose::{diagnose, EffectKind, LagShape, Options, Report, Verdict};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::stand::{simulate, StandConfig};
@@ -439,12 +442,12 @@ fn pairs(rng: &mut StdRng, pattern: Pattern) -> Vec<Pair> {
 
 /// What is wrong with the diagnosis of `pair` (empty: right).
 fn check_pair(pair: &Pair, seed: u64) -> Vec<String> {
-    diagnose_pair(pair, seed).1
+    diagnose_pair(pair, seed).0
 }
 
-/// The diagnosis of `pair`, what is wrong with it (empty: right), and whether it is silently
+/// What is wrong with the diagnosis of `pair` (empty: right), and whether it is silently
 /// wrong (says the model explains the data while J or the drag is more than 2 % off).
-fn diagnose_pair(pair: &Pair, seed: u64) -> (Report, Vec<String>, bool) {
+fn diagnose_pair(pair: &Pair, seed: u64) -> (Vec<String>, bool) {
     let c = &pair.config;
     let r = diagnose(&simulate(*c, &pair.excitation, seed), Options::default()).unwrap();
     let mid = 0.5 * (pair.excitation.lo.max(0.1) + pair.excitation.hi);
@@ -454,8 +457,7 @@ fn diagnose_pair(pair: &Pair, seed: u64) -> (Report, Vec<String>, bool) {
         Ties::Only(&pair.ties),
         Some(truth(c, mid)),
     );
-    let silent = matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
-        && !judge_fit(&r, truth(c, mid)).is_empty();
+    let silent = silently_wrong(&r, truth(c, mid));
     say(format!(
         "  {:<30} {:?} {} Hz: {} {}",
         pair.name,
@@ -469,7 +471,7 @@ fn diagnose_pair(pair: &Pair, seed: u64) -> (Report, Vec<String>, bool) {
         }
     ));
     verbose(&r);
-    (r, bad, silent)
+    (bad, silent)
 }
 
 /// The two-effect cases on `pattern` drawn from generator seed `seed`: what is wrong with each.
@@ -538,26 +540,17 @@ fn two_effects_at_once_on_the_seeds_sine() {
         let mut rng = StdRng::seed_from_u64(seed);
         for pair in pairs(&mut rng, Pattern::Sine) {
             let sim_seed = rng.random();
-            let (_, bad, silent) = diagnose_pair(&pair, sim_seed);
+            let (bad, silent) = diagnose_pair(&pair, sim_seed);
             let limit = SINE_PAIR_LIMITS
                 .iter()
                 .any(|&(n, s, _)| n == pair.name && s == seed);
-            match (bad.is_empty(), limit) {
-                (true, true) => failures.push(format!(
-                    "{} (seed {seed}): right now; take it off SINE_PAIR_LIMITS and the docs",
-                    pair.name
-                )),
-                (false, false) => {
-                    failures.push(format!("{} (seed {seed}): {}", pair.name, bad.join("; ")))
-                }
-                _ => {}
-            }
-            if silent {
-                failures.push(format!(
-                    "{} (seed {seed}): says the model explains the data while J or the drag is off",
-                    pair.name
-                ));
-            }
+            failures.extend(against_ledger(
+                &format!("{} (seed {seed})", pair.name),
+                bad,
+                limit,
+                silent,
+                false,
+            ));
         }
     }
     assert!(failures.is_empty(), "{}", failures.join("\n"));

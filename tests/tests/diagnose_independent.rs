@@ -18,7 +18,7 @@ mod expect;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use expect::{describe, judge, judge_fit, say, Expected, Ties, Truth};
+use expect::{against_ledger, describe, judge, say, silently_wrong, Expected, Ties, Truth};
 use propid_science::diagnose::{diagnose, read_samples, EffectKind, Options, Report, Verdict};
 use serde_json::Value;
 
@@ -175,11 +175,6 @@ fn problems(r: &Report, truth: &Value) -> Vec<String> {
     bad
 }
 
-/// A verdict that says the model (the seed's, or with the effects named) explains the data.
-fn says_explained(r: &Report) -> bool {
-    matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
-}
-
 #[test]
 #[ignore = "needs python3 with numpy and scipy (ci/steps/38-diagnose-independent.sh)"]
 fn the_independent_stand_is_diagnosed_right() {
@@ -246,29 +241,16 @@ fn the_independent_stand_is_diagnosed_right() {
                     format!("\n{:>44}{}", "", bad.join("; "))
                 }
             ));
-            match (bad.is_empty(), limit) {
-                (true, None) => right += 1,
-                (true, Some(_)) => wrong.push(format!(
-                    "{case} seed {seed}: right now; take it off KNOWN_LIMITS and the docs"
-                )),
-                (false, Some(_)) => {
-                    // Honest: a verdict that the model explains the data only where its J and
-                    // drag are right anyway (the effect missed does not matter at 2 %).
-                    let silent = SILENTLY_WRONG.iter().any(|&(c, s)| c == case && s == seed);
-                    let off = says_explained(&r) && !judge_fit(&r, truth_of(&truth)).is_empty();
-                    if off != silent {
-                        wrong.push(format!(
-                            "{case} seed {seed}: {}",
-                            if off {
-                                "a known limit, but the verdict says the model explains the data while J or the drag is off"
-                            } else {
-                                "no longer silently wrong: take it off SILENTLY_WRONG and the docs"
-                            }
-                        ));
-                    }
-                }
-                (false, None) => wrong.push(format!("{case} seed {seed}: {}", bad.join("; "))),
+            if bad.is_empty() && limit.is_none() {
+                right += 1;
             }
+            wrong.extend(against_ledger(
+                &format!("{case} seed {seed}"),
+                bad,
+                limit.is_some(),
+                silently_wrong(&r, truth_of(&truth)),
+                SILENTLY_WRONG.iter().any(|&(c, s)| c == case && s == seed),
+            ));
         }
     }
     let total = CASES.len() * seeds.len();

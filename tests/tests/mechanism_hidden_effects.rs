@@ -10,7 +10,10 @@
 
 mod expect;
 
-use expect::{describe, judge, judge_fit, say, verbose, Expected, Ties, Truth, CONSTANT_TWINS};
+use expect::{
+    against_ledger, describe, judge, judge_fit, say, silently_wrong, verbose, Expected, Ties,
+    Truth, CONSTANT_TWINS,
+};
 use propid_io::tsv::{Row, Sample};
 use propid_mechsim::scenarios::{Bench, Expect, ExpectedEffect, Hidden, Scenario};
 use propid_mechsim::{pattern, MechConfig, Record};
@@ -581,7 +584,7 @@ fn combined(
 fn two_mechanisms_at_once_are_found_jointly_on_a_chirp() {
     let failures: Vec<String> = two_mechanisms(20261202, Pattern::Chirp)
         .into_iter()
-        .flat_map(|o| o.wrong)
+        .flat_map(|o| o.wrong.into_iter().map(move |w| format!("{}: {w}", o.what)))
         .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
@@ -618,35 +621,26 @@ const SINE_SILENTLY_WRONG: &[&str] = &["lag + offset"];
 /// off) but those in [`SINE_SILENTLY_WRONG`]. The test fails when a listed pair becomes right.
 #[test]
 fn two_mechanisms_at_once_on_the_seeds_sine() {
-    let mut failures = Vec::new();
-    for o in two_mechanisms(20261202, Pattern::Sine) {
-        let limit = SINE_PAIR_LIMITS.iter().any(|&(n, _)| n == o.name);
-        match (o.wrong.is_empty(), limit) {
-            (true, true) => failures.push(format!(
-                "{}: right now; take it off SINE_PAIR_LIMITS and the docs",
-                o.name
-            )),
-            (false, false) => failures.extend(o.wrong),
-            _ => {}
-        }
-        if o.silent != SINE_SILENTLY_WRONG.contains(&o.name) {
-            failures.push(format!(
-                "{}: {}",
-                o.name,
-                if o.silent {
-                    "says the model explains the data while J or the drag is off"
-                } else {
-                    "no longer silently wrong: take it off SINE_SILENTLY_WRONG and the docs"
-                }
-            ));
-        }
-    }
+    let failures: Vec<String> = two_mechanisms(20261202, Pattern::Sine)
+        .into_iter()
+        .flat_map(|o| {
+            against_ledger(
+                &o.what,
+                o.wrong,
+                SINE_PAIR_LIMITS.iter().any(|&(n, _)| n == o.name),
+                o.silent,
+                SINE_SILENTLY_WRONG.contains(&o.name),
+            )
+        })
+        .collect();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 /// How one pair of mechanisms was diagnosed.
 struct PairOutcome {
     name: &'static str,
+    /// The pair, pattern and rate, for messages.
+    what: String,
     /// What is wrong (empty: right).
     wrong: Vec<String>,
     /// Whether the verdict says the model explains the data while J or the drag is off.
@@ -739,15 +733,11 @@ fn two_mechanisms(seed: u64, p: Pattern) -> Vec<PairOutcome> {
                 }
             ));
             verbose(&r);
-            let silent = matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
-                && !judge_fit(&r, truth(&s)).is_empty();
             outcomes.push(PairOutcome {
                 name,
-                wrong: bad
-                    .into_iter()
-                    .map(|b| format!("{name} {p_name} {rate} Hz: {b}"))
-                    .collect(),
-                silent,
+                what: format!("{name} {p_name} {rate} Hz"),
+                wrong: bad,
+                silent: silently_wrong(&r, truth(&s)),
             });
         }
     }

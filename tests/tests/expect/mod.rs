@@ -4,7 +4,7 @@
 
 #![allow(dead_code)]
 
-use propid_science::diagnose::{EffectKind, Report};
+use propid_science::diagnose::{EffectKind, Report, Verdict};
 
 /// One effect a report must give, with its truth and relative tolerance.
 #[derive(Clone, Copy, Debug)]
@@ -272,6 +272,46 @@ pub fn judge_fit(r: &Report, truth: Truth) -> Vec<String> {
     } else {
         Vec::new()
     }
+}
+
+/// Whether a report is silently wrong: its verdict says the model (the seed's, or with the
+/// effects named) explains the data while J or the drag is more than 2 % off.
+pub fn silently_wrong(r: &Report, truth: Truth) -> bool {
+    matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
+        && !judge_fit(r, truth).is_empty()
+}
+
+/// One run held to a test's ledger of known limits: what is wrong with it (empty: it is as the
+/// ledger says). `wrong`: what the judge found; `listed`: the run is a known limit; `silent`:
+/// [`silently_wrong`]; `listed_silent`: it is known to be. A listed run that became right, or a
+/// silently wrong run that is no longer (or a new one), fails too, so the ledger and the docs
+/// cannot drift.
+pub fn against_ledger(
+    what: &str,
+    wrong: Vec<String>,
+    listed: bool,
+    silent: bool,
+    listed_silent: bool,
+) -> Vec<String> {
+    let mut out = Vec::new();
+    match (wrong.is_empty(), listed) {
+        (true, true) => out.push(format!(
+            "{what}: right now; take it off the known limits and the docs"
+        )),
+        (false, false) => out.extend(wrong.into_iter().map(|w| format!("{what}: {w}"))),
+        _ => {}
+    }
+    if silent != listed_silent {
+        out.push(format!(
+            "{what}: {}",
+            if silent {
+                "a verdict that the model explains the data while J or the drag is off"
+            } else {
+                "no longer silently wrong: take it off the silently-wrong list and the docs"
+            }
+        ));
+    }
+    out
 }
 
 /// Every candidate of `r`, one line each, when `PROPID_VERBOSE` is set (to read why a draw went
