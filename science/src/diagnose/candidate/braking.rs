@@ -174,6 +174,10 @@ impl Candidate for BrakingTorque {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A torque term: tuned by the equation.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

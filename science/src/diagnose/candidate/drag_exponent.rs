@@ -97,6 +97,10 @@ impl Candidate for DragExponent {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A torque term: tuned by the equation.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, e: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::Exponent(e.param)
     }

@@ -285,13 +285,12 @@ pub(crate) trait Candidate: Sync {
     /// Whether the held-out simulation of the velocity can see it (a torque ripple far above
     /// the sample rate moves the load as its mean over a step does: about nothing).
     fn simulation_sees(&self) -> bool;
-    /// Whether its time constant is tuned by the simulated velocity as well as the equation
-    /// (`tune`): a lag of what drives the rotor. A lag of the acceleration's estimate leaves the
-    /// velocity, which the simulation is scored on, untouched, and a force sensor's lag is the
-    /// equation's coefficient of the force's slope: both override this with `false`.
-    fn tuned_by_simulation(&self) -> bool {
-        self.slot() == Slot::Lag
-    }
+    /// Whether its nonlinear parameter is tuned by the simulated velocity as well as the
+    /// equation (`tune`): a lag of what drives the rotor (the torque's, a second-order stage).
+    /// Not a term of the equation, nor a lag of the acceleration's estimate (it leaves the
+    /// velocity, which the simulation is scored on, untouched), nor a force sensor's lag (the
+    /// equation's coefficient of the force's slope).
+    fn tuned_by_simulation(&self) -> bool;
     /// What it changes in the seed's parameters.
     fn base_term(&self, e: &Effect, v: Estimate) -> BaseTerm;
     /// Its regression column on a designed pattern (for `propid plan`'s separations); `None`

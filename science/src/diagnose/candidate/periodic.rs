@@ -85,6 +85,10 @@ impl Candidate for PeriodicDisturbance {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A torque term: tuned by the equation.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

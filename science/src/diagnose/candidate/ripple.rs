@@ -135,6 +135,10 @@ impl Candidate for TorqueRipple {
     fn simulation_sees(&self) -> bool {
         false
     }
+    /// A torque term: tuned by the equation.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

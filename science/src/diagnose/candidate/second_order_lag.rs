@@ -280,6 +280,10 @@ impl Candidate for SecondOrderLag {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A stage between the reported force and the rotor: the simulation sees its phase.
+    fn tuned_by_simulation(&self) -> bool {
+        true
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

@@ -144,6 +144,10 @@ impl Candidate for TimeBase {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// Measured from the rows, not tuned.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

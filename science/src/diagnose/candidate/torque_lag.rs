@@ -104,6 +104,10 @@ impl Candidate for TorqueLag {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A lag of what drives the rotor: the simulation sees its phase.
+    fn tuned_by_simulation(&self) -> bool {
+        true
+    }
     fn base_term(&self, _: &Effect, _: Estimate) -> BaseTerm {
         BaseTerm::None
     }

@@ -92,6 +92,10 @@ impl Candidate for TorqueTerm {
     fn simulation_sees(&self) -> bool {
         true
     }
+    /// A torque term: tuned by the equation.
+    fn tuned_by_simulation(&self) -> bool {
+        false
+    }
     fn base_term(&self, _: &Effect, v: Estimate) -> BaseTerm {
         (self.base_term)(v)
     }
