@@ -235,6 +235,13 @@ class Diagnosis(_Record):
         "and J and c2 with it (inertia_with, c2_with).",
         "optional",
     )
+    simulation_only: _Field[Optional[Dict[str, Any]]] = _Field(
+        "simulation_only",
+        "What the simulated velocity still shows and the acceleration equation does not confirm "
+        "(effect, value, unit, simulation_gain_percent, equation_gain_percent), where J and c2 "
+        "move with it (inertia_with, c2_with); the verdict is then unexplained.",
+        "optional",
+    )
     notes: _Field[List[str]] = _Field("notes", "Notes about the data.")
 
     def __init__(self, data: Dict[str, Any], text: str = "") -> None:

@@ -248,6 +248,10 @@ impl Outcome {
             out.warnings
                 .push(crate::diagnose::left_out_sentence(l, &r.extended));
         }
+        if let Some(o) = &r.simulation_only {
+            out.warnings
+                .push(crate::diagnose::simulation_only_sentence(o, &r.extended));
+        }
         if !r.ambiguities.is_empty() {
             out.warnings.push(format!(
                 "the data cannot rule out {} other model(s): model_spread is how far their values lie from these",

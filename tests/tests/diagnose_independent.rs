@@ -1,6 +1,6 @@
 //! `propid diagnose` against the independent reference stand (tests/independent_stand: Python,
 //! written from first principles without reading propid's simulators or its diagnosis). Every
-//! diagnosis case of the stand, one effect or two at once, is generated with two noise seeds and
+//! diagnosis case of the stand, one effect or two at once, is generated with six noise seeds (two read while tuning, four held out) and
 //! judged against the truth the stand's JSON states: the effects an ideal report names (or an
 //! ambiguity the stand itself lists as equivalent), each value within 10 %, the extended model's J
 //! and drag within 2 %, a load transient localised in time, and nothing named on clean data.
@@ -49,8 +49,21 @@ const CASES: &[&str] = &[
     "transient_early",
 ];
 
-/// The noise seeds every case is drawn with.
-const SEEDS: [u64; 2] = [1, 2];
+/// The noise seeds every case is drawn with: [`TUNING_SEEDS`], then [`HELD_OUT_SEEDS`].
+const SEEDS: [u64; 6] = [1, 2, 3, 4, 5, 6];
+
+/// The seeds the selection was developed against: its rules and the lags' tuning were changed
+/// while reading these runs (docs/SCIENCE.md "Lags tuned by the simulated velocity").
+const TUNING_SEEDS: [u64; 2] = [1, 2];
+
+/// Seeds drawn only after those changes, to validate them on runs that played no part in them:
+/// first run on 2026-11-26 against main 6b363b0: 15, 15, 16 and 16 of 23 right as judged here,
+/// the second-order sensor stage "explained" with J 3.6 % low on seeds 3, 4 and 6, and the clean
+/// runs of seeds 3 and 4 "unexplained" (a residual peak at the sine's own frequency). Seeds 3 and
+/// 4 were then read to find why (what the simulated velocity alone shows is now reported:
+/// `SimulationOnly`; a peak where the force is driven is not a disturbance); seeds 5 and 6 were
+/// not, and validate the first change (seed 6's stage is no longer "explained").
+const HELD_OUT_SEEDS: [u64; 4] = [3, 4, 5, 6];
 
 /// Cases (case, seed) the diagnosis does not get right today, and why. Each must still end
 /// honestly: no verdict that the model explains the data while its J or drag is more than 2 %
@@ -67,10 +80,46 @@ const KNOWN_LIMITS: &[(&str, u64, &str)] = &[
     ("force_sensor_2nd_order", 2, SENSOR_LAG),
     ("acceleration_lag", 1, SENSOR_LAG),
     ("acceleration_lag", 2, SENSOR_LAG),
+    // The held-out seeds: the same families, and the second-order stage on both.
+    ("lag_viscous", 3, LAG_UNDER_A_TERM),
+    ("lag_viscous", 4, LAG_UNDER_A_TERM),
+    ("drag_exponent_offset", 3, SPEED_SHAPES),
+    ("drag_exponent_offset", 4, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 3, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 4, SPEED_SHAPES),
+    ("force_sensor_lag", 3, SENSOR_LAG),
+    ("force_sensor_lag", 4, SENSOR_LAG),
+    ("force_sensor_2nd_order", 3, SENSOR_LAG),
+    ("force_sensor_2nd_order", 4, SENSOR_LAG),
+    ("acceleration_lag", 3, SENSOR_LAG),
+    ("acceleration_lag", 4, SENSOR_LAG),
+    ("lag_viscous", 5, LAG_UNDER_A_TERM),
+    ("lag_viscous", 6, LAG_UNDER_A_TERM),
+    ("drag_exponent_offset", 5, SPEED_SHAPES),
+    ("drag_exponent_offset", 6, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 5, SPEED_SHAPES),
+    ("sensor_filter_drag_exponent", 6, SPEED_SHAPES),
+    ("force_sensor_lag", 5, SENSOR_LAG),
+    ("force_sensor_lag", 6, SENSOR_LAG),
+    ("force_sensor_2nd_order", 5, SENSOR_LAG),
+    ("force_sensor_2nd_order", 6, SENSOR_LAG),
+    ("acceleration_lag", 5, SENSOR_LAG),
+    ("acceleration_lag", 6, SENSOR_LAG),
+    ("lag_offset", 5, LAG_PRECISION),
+    ("lag_offset", 6, LAG_PRECISION),
 ];
 
+/// A 15 ms lag beside a 0.02 N·m offset named at 17.2 and 13.4 ms (+15 % and −11 %; 14.7–16.3 ms
+/// on seeds 1–4): the lag's spread on this stand's noise is wider than the 10 % judged.
+const LAG_PRECISION: &str = "a lag's value beside an offset, 11–15 % off on two draws";
+
 /// Known limits where the verdict is worse than a miss: it says the model explains the data
-/// while J or the drag is more than 2 % off (docs/SCIENCE.md would say so). None today. (Braking
+/// while J or the drag is more than 2 % off (docs/SCIENCE.md would say so). None today. The
+/// second-order sensor stage was on held-out seeds 3, 4 and 6: a −2.7 mN·m offset named, J
+/// 3.6 % low, the drag 5.3 % high, "explained", while a drag exponent or a viscous term gained
+/// 22 % in the simulated velocity and 0.1 % in the equation (rule 4 names nothing the equation
+/// does not confirm); the report now says the velocity is unexplained and what J would read.
+/// (Braking
 /// beside a torque lag, seed 2, was until the braking spells were located where the velocity
 /// kinks: the ±20 ms slope turned 12 ms before each step the braking makes, a timing error a
 /// viscous friction absorbed better than the lag, and J read 3.5 % high, c2 6.3 % low.)
@@ -153,6 +202,17 @@ fn problems(r: &Report, truth: &Value) -> Vec<String> {
         })
         .collect();
     let mut bad = judge(r, &expected, Ties::Only(&pairs), Some(truth_of(truth)));
+    // Nothing hidden: the ideal report says the seed's model explains the data, and so must the
+    // verdict (nothing named is not enough: an "unexplained" there is a false alarm).
+    if expected.is_empty()
+        && ideal["unexplained"].as_array().unwrap().is_empty()
+        && r.verdict != Verdict::NothingWrong
+    {
+        bad.push(format!(
+            "nothing is hidden, but the verdict is {:?}",
+            r.verdict
+        ));
+    }
     for window in ideal["unexplained"].as_array().unwrap() {
         let (from, to) = (
             window["t_start_s"].as_f64().unwrap(),
@@ -182,6 +242,7 @@ fn the_independent_stand_is_diagnosed_right() {
     std::fs::create_dir_all(&out).unwrap();
     let mut wrong = Vec::new();
     let mut right = 0;
+    let mut right_held_out = 0;
     let mut transient_bias = Vec::new();
     say(format!(
         "{:<30} {:>4}  {:<7} report",
@@ -219,7 +280,7 @@ fn the_independent_stand_is_diagnosed_right() {
             if let Some(l) = r
                 .left_out
                 .as_ref()
-                .filter(|_| case.starts_with("transient"))
+                .filter(|_| case.starts_with("transient") && TUNING_SEEDS.contains(&seed))
             {
                 transient_bias.push(100.0 * (l.inertia_with / r.extended.inertia - 1.0));
             }
@@ -243,6 +304,9 @@ fn the_independent_stand_is_diagnosed_right() {
             ));
             if bad.is_empty() && limit.is_none() {
                 right += 1;
+                if HELD_OUT_SEEDS.contains(&seed) {
+                    right_held_out += 1;
+                }
             }
             wrong.extend(against_ledger(
                 &format!("{case} seed {seed}"),
@@ -254,8 +318,12 @@ fn the_independent_stand_is_diagnosed_right() {
         }
     }
     let total = CASES.len() * seeds.len();
+    let held_out = seeds.iter().filter(|s| HELD_OUT_SEEDS.contains(s)).count();
     say(format!(
-        "right {right} of {total}; known limits {}",
+        "right {right} of {total}: {} of {} on the tuning seeds {TUNING_SEEDS:?}, {right_held_out} of {} on the held-out seeds {HELD_OUT_SEEDS:?}; known limits {}",
+        right - right_held_out,
+        CASES.len() * (seeds.len() - held_out),
+        CASES.len() * held_out,
         KNOWN_LIMITS.len()
     ));
     // docs/SCIENCE.md, "An event in time": the transients' samples moved J by 3.2–5.2 %.

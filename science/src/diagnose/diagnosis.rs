@@ -10,17 +10,24 @@ use super::engine::{fit, fit_every_row, fit_on_all, held_out_residuals, residual
 use super::model::{Effect, Model};
 use super::report::{
     Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
-    ResidualAnalysis, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
+    ResidualAnalysis, SimulationOnly, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
 };
 use super::search::{estimate_of, search, Found, Scored};
 use super::select::{self, Decision, Evidence};
 use super::signals::{correlation, Signals};
 use super::simulate::{rms_error, simulate, SimPlan};
-use super::structure::{concentration, event_span, harmonic_correlations, periodogram, LeftOut};
+use super::structure::{
+    concentration, event_span, harmonic_correlations, periodogram, sinusoid_share, LeftOut,
+};
 use super::{Observer, Options, Stage, HOLDOUT, STEADY_SHARE};
 
 /// Peak of the residual's spectrum over its median from which a periodic probe is tried.
 const PEAK_TO_MEDIAN: f64 = 40.0;
+
+/// A residual peak is at a frequency the force is driven at when one sinusoid there carries at
+/// least this share of the force's variance: the probe and the force are then more one column
+/// than two.
+const DRIVEN_SHARE: f64 = 0.5;
 
 /// The seed's parameters (and c1, the drag law) of `model` fitted as `fit`.
 fn base_model_of(fit: &Fit, model: &Model, s: &Signals) -> BaseModel {
@@ -207,7 +214,19 @@ pub(crate) fn run(
     // Structure left: periodic in time, or concentrated somewhere in the record.
     let r_ext = residuals(&model, &ext_fit, s);
     let (f_peak, ratio) = periodogram(s, &r_ext);
-    let unexplained = (ratio > PEAK_TO_MEDIAN)
+    // A peak where the force itself is one sinusoid (the seed's sine at its own frequency) is
+    // the model's response to its input: a probe there is one column with the force, and its
+    // amplitude trades against 1/J (on a clean independent stand it took 0.04 N·m, the force's
+    // whole swing, and "gained" by undoing the torque noise's bias on J). The candidates that
+    // act through the input (a lag, J itself) were tried; it is not reported as a disturbance.
+    let driven = ratio > PEAK_TO_MEDIAN
+        && sinusoid_share(&s.force[s.first..], s.rate, f_peak) >= DRIVEN_SHARE;
+    if driven {
+        notes.push(format!(
+            "the residual peaks at {f_peak:.3} Hz, where the force itself is driven: that is the model's response to its own input (a sinusoid there cannot be told from J), not a disturbance"
+        ));
+    }
+    let unexplained = (ratio > PEAK_TO_MEDIAN && !driven)
         .then(|| periodic(&found.model, s, &plan, f_peak, ratio, &correlations))
         .flatten();
     let held_out = held_out_residuals(&model, s);
@@ -235,6 +254,7 @@ pub(crate) fn run(
         })
     });
     drop(held_out);
+    let simulation_only = simulation_only(&found, &extended, s);
     let mut unidentified = Unidentified::of(&extended);
     // Errors in the regressor: the torque's noise biases J beyond what its standard error says.
     let bias = crate::plausibility::torque_noise_bias(&s.force, &s.velocity);
@@ -289,11 +309,36 @@ pub(crate) fn run(
         unidentified,
         concentration,
         left_out,
+        simulation_only,
         notes,
         traces,
     };
     report.conclude();
     Ok(report)
+}
+
+/// The best candidate of the search's last round that the simulated velocity alone would name
+/// (`Found::unconfirmed`) and with which J or c2 do not agree with `extended`'s (the agreement an
+/// ambiguity's J and c2 are given by): the model's J and c2 then depend on what it does not hold.
+fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<SimulationOnly> {
+    found.unconfirmed.iter().find_map(|u| {
+        let with = base_model_of(&fit_on_all(&u.model, s)?, &u.model, s);
+        let moves = !agree(
+            with.inertia,
+            with.inertia_stderr,
+            extended.inertia,
+            extended.inertia_stderr,
+        ) || !agree(with.c2, with.c2_stderr, extended.c2, extended.c2_stderr);
+        moves.then(|| SimulationOnly {
+            effect: u.effect.kind,
+            value: u.estimate.value,
+            unit: u.effect.kind.unit(),
+            simulation_gain_percent: u.simulation_percent,
+            equation_gain_percent: u.equation_percent,
+            inertia_with: with.inertia,
+            c2_with: with.c2,
+        })
+    })
 }
 
 /// The ambiguity between `named` (in `model`, fitted as `fit`) and `alternative`: both values,

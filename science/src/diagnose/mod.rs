@@ -42,8 +42,8 @@ pub use gate::CannotJudge;
 pub use model::LagShape;
 pub use report::{
     Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
-    ResidualAnalysis, SeparatingRun, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
-    MAX_RELATIVE_STDERR,
+    ResidualAnalysis, SeparatingRun, SimulationOnly, SimulationRms, Traces, Unexplained,
+    Unidentified, Verdict, MAX_RELATIVE_STDERR,
 };
 pub use search::CandidateScore;
 #[doc(hidden)]
@@ -56,7 +56,7 @@ pub use select::{
 pub use simulate::SIMULATED;
 pub use steady::DragLaw;
 pub use structure::{Concentration, Condition, LeftOut, CONCENTRATION_RATIO, EVENT_SHARE};
-pub use text::{figure as report_figure, left_out_sentence, to_text};
+pub use text::{figure as report_figure, left_out_sentence, simulation_only_sentence, to_text};
 
 /// Where a diagnosis is, for a progress display (the library never prints): on a log of an hour
 /// at 500 Hz the selection takes seconds per round.

@@ -110,6 +110,29 @@ pub struct Unexplained {
     pub frequency_hz: f64,
 }
 
+/// What the simulated velocity still shows and the acceleration equation does not confirm: an
+/// effect that would be named on the simulation alone (rules 1–3 pass, the gain reaches
+/// [`super::MIN_GAIN`]) but that rule 4 keeps out, and with which J or c2 would not agree with
+/// the extended model's. The model does not explain the velocity, and its J and c2 depend on
+/// what it lacks: the verdict is then unexplained, never explained.
+#[derive(Clone, Debug, Serialize)]
+pub struct SimulationOnly {
+    /// The effect the simulation would take.
+    pub effect: EffectKind,
+    /// Its value, in [`EffectKind::unit`].
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+    /// How much lower the pooled held-out simulated-velocity error is with it [%].
+    pub simulation_gain_percent: f64,
+    /// How much lower the pooled held-out acceleration error is with it [%].
+    pub equation_gain_percent: f64,
+    /// J with it [kg·m²].
+    pub inertia_with: f64,
+    /// c2 (or its quadratic equivalent) with it [N·m·s²/rad²].
+    pub c2_with: f64,
+}
+
 /// A `propid drive` run that shows an effect, or tells two apart.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SeparatingRun {
@@ -361,6 +384,9 @@ pub struct Report {
     /// Where that concentration is an event in time: the span the extended model (its J, c2 and
     /// effects) was fitted without, and J and c2 with it.
     pub left_out: Option<LeftOut>,
+    /// What the simulated velocity still shows that the equation does not confirm, where J or
+    /// c2 move with it.
+    pub simulation_only: Option<SimulationOnly>,
     /// Effects the data cannot tell from one that is named.
     pub ambiguities: Vec<Ambiguity>,
     /// Candidates that came close to being named, best first.
@@ -429,6 +455,7 @@ impl Report {
             unidentified: Vec::new(),
             concentration: None,
             left_out: None,
+            simulation_only: None,
             notes: Vec::new(),
             traces: Traces::default(),
         }
@@ -446,6 +473,7 @@ impl Report {
         } else if self.unexplained.is_some()
             || self.concentration.is_some()
             || self.left_out.is_some()
+            || self.simulation_only.is_some()
         {
             Verdict::Unexplained
         } else if self.effects.is_empty() {

@@ -100,6 +100,26 @@ pub(crate) struct Found {
     pub ties: Vec<Tie>,
     /// Notes on the search.
     pub notes: Vec<String>,
+    /// Of the last round, the candidates the simulated velocity alone would name (see
+    /// [`Unconfirmed`]), best first.
+    pub unconfirmed: Vec<Unconfirmed>,
+}
+
+/// A candidate of the round that ended the search which passes rules 1–3 and gains what naming
+/// asks, but which rule 4 rejects: the simulated velocity improves and the acceleration equation,
+/// where the effect is a term, does not. It is not named; the model then does not explain the
+/// velocity, and where J or c2 move with it the report says so (`diagnosis`).
+#[derive(Clone)]
+pub(crate) struct Unconfirmed {
+    /// The effect as tuned, and the model with it.
+    pub effect: Effect,
+    pub model: Model,
+    /// Its value.
+    pub estimate: Estimate,
+    /// Its gain over the final model, and the two pooled gains [%].
+    pub gain: Gain,
+    pub equation_percent: f64,
+    pub simulation_percent: f64,
 }
 
 /// One effect tried on a model: its tuned form and its evidence.
@@ -606,6 +626,39 @@ impl Search<'_> {
         true
     }
 
+    /// Records the candidates of the round that ended the search (`trials`, tried on the model
+    /// as it is) that only rule 4 kept from being named.
+    fn unconfirmed(&mut self, trials: &[Trial]) {
+        let parent = self.current.errors();
+        let mut found: Vec<Unconfirmed> = trials
+            .iter()
+            .filter(|t| {
+                matches!(
+                    select::judge(&parent, &t.evidence),
+                    Some(Decision::Rejected {
+                        reason: Rejection::EquationSilent
+                    })
+                ) && Gain::of(&parent, &t.evidence.errors).mean >= select::MIN_GAIN
+            })
+            .map(|t| Unconfirmed {
+                effect: t.effect,
+                model: t.scored.model.clone(),
+                estimate: t.evidence.estimate,
+                gain: Gain::of(&parent, &t.evidence.errors),
+                equation_percent: pooled_percent(
+                    &self.current.scores.equation,
+                    &t.scored.scores.equation,
+                ),
+                simulation_percent: pooled_percent(
+                    &self.current.scores.simulation,
+                    &t.scored.scores.simulation,
+                ),
+            })
+            .collect();
+        found.sort_by(|a, b| b.gain.mean.total_cmp(&a.gain.mean));
+        self.found.unconfirmed = found;
+    }
+
     /// Rule 8 for every effect but the newest: its rivals in its place.
     fn exchange(&mut self) {
         let newest = self.current.model.effects.len().saturating_sub(1);
@@ -791,6 +844,7 @@ pub(crate) fn search(
             entered_with: Vec::new(),
             ties: Vec::new(),
             notes: Vec::new(),
+            unconfirmed: Vec::new(),
         },
         current,
         excluded: Vec::new(),
@@ -813,6 +867,7 @@ pub(crate) fn search(
         }
         if let Some(trials) = search.forward() {
             if !search.pairs(&trials) {
+                search.unconfirmed(&trials);
                 break;
             }
         }

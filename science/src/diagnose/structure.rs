@@ -264,6 +264,18 @@ fn power_at(r: &[f64], mean: f64, rate: f64, f: f64) -> f64 {
     re * re + im * im
 }
 
+/// The share of `x`'s variance (sampled at `rate`) that one sinusoid at `f` carries: 1 for a
+/// pure sinusoid there, near 0 where `x` has no component at `f`.
+pub(crate) fn sinusoid_share(x: &[f64], rate: f64, f: f64) -> f64 {
+    let n = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / n.max(1.0);
+    let variance: f64 = x.iter().map(|v| (v - mean) * (v - mean)).sum();
+    if variance <= 0.0 {
+        return 0.0;
+    }
+    2.0 * power_at(x, mean, rate, f) / (n * variance)
+}
+
 /// The largest peak of the residual's spectrum between 2/T and min(rate/2, 60 Hz): its frequency
 /// and its power over the median power of the bins in that band. The spectrum is one real FFT of
 /// the mean-removed residual, taken on the uniform grid of the median rate and zero-padded to at

@@ -1,6 +1,6 @@
 //! The diagnosis as text and as plots, rendered from the typed report.
 
-use super::report::BaseModel;
+use super::report::{BaseModel, SimulationOnly};
 use super::select::Decision;
 use super::structure::{Condition, LeftOut};
 use super::EffectKind;
@@ -126,6 +126,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
         && r.ambiguities.is_empty()
         && r.unexplained.is_none()
         && r.concentration.is_none()
+        && r.simulation_only.is_none()
     {
         if r.near_misses.is_empty() && identified {
             s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
@@ -222,6 +223,12 @@ pub fn to_text(r: &Report, source: &str) -> String {
     }
     if let Some(l) = &r.left_out {
         s += &format!("   {}\n", left_out_sentence(l, &r.extended));
+    }
+    if let Some(o) = &r.simulation_only {
+        s += &format!(
+            "   Unexplained: {}\n",
+            simulation_only_sentence(o, &r.extended)
+        );
     }
     for n in &r.notes {
         s += &format!("   Note: {n}\n");
@@ -341,6 +348,25 @@ fn decision_words(effect: EffectKind, d: &Decision) -> String {
         Decision::Dropped => "dropped (the model no longer needs it)".into(),
         Decision::Rejected { reason } => reason.to_string(),
     }
+}
+
+/// What the simulated velocity shows and the equation does not confirm, in a sentence (the
+/// report's text and the Result's warning).
+pub fn simulation_only_sentence(o: &SimulationOnly, extended: &BaseModel) -> String {
+    let unit = if o.unit == "1" {
+        String::new()
+    } else {
+        format!(" {}", o.unit)
+    };
+    format!(
+        "the simulated velocity is not explained: its held-out error drops by {1:.1} % with {0} = {2:.4e}{unit} while the acceleration equation's moves by {3:+.2} %, too little to name it; J and c2 depend on what the model lacks (with it J reads {4:+.1} % and c2 {5:+.1} %)",
+        o.effect,
+        o.simulation_gain_percent,
+        o.value,
+        o.equation_gain_percent,
+        100.0 * (o.inertia_with / extended.inertia - 1.0),
+        100.0 * (o.c2_with / extended.c2 - 1.0)
+    )
 }
 
 /// What leaving an event's samples out did, in a sentence (the report's text and the Result's
