@@ -69,7 +69,6 @@ const HELD_OUT_SEEDS: [u64; 4] = [3, 4, 5, 6];
 /// honestly: no verdict that the model explains the data while its J or drag is more than 2 %
 /// off.
 const KNOWN_LIMITS: &[(&str, u64, &str)] = &[
-    ("lag_viscous", 1, LAG_UNDER_A_TERM),
     ("lag_viscous", 2, LAG_UNDER_A_TERM),
     ("drag_exponent_offset", 1, SPEED_SHAPES),
     ("drag_exponent_offset", 2, SPEED_SHAPES),
@@ -127,7 +126,9 @@ const SILENTLY_WRONG: &[(&str, u64)] = &[];
 
 /// A torque lag beside a term that takes most of it first: a 10 ms lag beside a viscous friction
 /// on the sine (a Coulomb friction is named in the first round, beside which the lag, re-tuned,
-/// no longer passes). Each lag's time constant is tuned by both held-out errors (the simulated
+/// no longer passes). Rule 10 exchanges the Coulomb friction for the lag and the viscous term on
+/// seed 1 (right) and seed 2 (both named, the lag 11.2 ms, 12 % long; J and c2 within 1 %); on
+/// seeds 3–6 the pair is not separated from the Coulomb friction beside another effect. Each lag's time constant is tuned by both held-out errors (the simulated
 /// velocity's too) since the equation's alone, dominated by this stand's acceleration noise,
 /// tuned a 15 ms lag to 0.4 ms.
 const LAG_UNDER_A_TERM: &str = "a lag beside a torque term that absorbs it in the first round";

@@ -563,7 +563,8 @@ impl Search<'_> {
             }
         }
         let (s, plan) = (self.s, self.plan);
-        let outcomes = in_parallel(&pairs, |&(a, b)| try_pair(a, b, &parent, s, plan));
+        let against = parent.errors();
+        let outcomes = in_parallel(&pairs, |&(a, b)| try_pair(a, b, &parent, &against, s, plan));
         let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
             Gain::of(&parent.errors(), &x.errors())
                 .mean
@@ -738,6 +739,153 @@ impl Search<'_> {
         }
     }
 
+    /// Rule 10, after a round that named nothing, alone or in pairs: a term named first can stand
+    /// in for a lag and another term together (a constant torque takes a lag's place beside a
+    /// viscous friction; a viscous term a current-sense filter's beside an offset), and a lag
+    /// tried on top of it then gains nothing. Each term of the model is tried exchanged for a
+    /// lag and one of the terms it outdid when it was named (its rivals), the pair named by rule
+    /// 9 against the model as it is, and separated (rule 5) from the best model of its size that
+    /// keeps the term (the term beside one admissible effect of the round, `trials`): the best such
+    /// exchange is made. Whether it named a pair.
+    fn exchange_for_pair(&mut self, trials: &[Trial]) -> bool {
+        use super::candidate::Slot;
+        let parent = self.current.clone();
+        if parent.model.effects.len() + 1 > self.max_effects || parent.model.has_lag() {
+            return false;
+        }
+        let (s, plan) = (self.s, self.plan);
+        let lags: Vec<EffectKind> = EffectKind::searched()
+            .filter(|k| {
+                k.candidate().slot() == Slot::Lag
+                    && k.refines().is_none()
+                    && !self.excluded.contains(k)
+            })
+            .collect();
+        let against = parent.errors();
+        #[allow(clippy::type_complexity)]
+        let mut best: Option<(usize, Scored, Scored, Vec<(EffectKind, Scored)>)> = None;
+        for i in 0..parent.model.effects.len() {
+            let old = parent.model.effects[i];
+            if old.candidate().slot() != Slot::Term {
+                continue;
+            }
+            let terms: Vec<EffectKind> = self
+                .rivals
+                .iter()
+                .find(|(k, _)| *k == old.kind)
+                .map(|(_, r)| r.clone())
+                .unwrap_or_default()
+                .into_iter()
+                .filter(|k| k.candidate().slot() == Slot::Term && !parent.model.has(*k))
+                .collect();
+            if terms.is_empty() {
+                continue;
+            }
+            let Some(rest) = Scored::of(parent.model.without(i), s, plan) else {
+                continue;
+            };
+            let jobs: Vec<(EffectKind, EffectKind)> = terms
+                .iter()
+                .flat_map(|&t| lags.iter().map(move |&l| (t, l)))
+                .collect();
+            COUNTS[1].fetch_add(jobs.len(), Ordering::Relaxed);
+            let outcomes = in_parallel(&jobs, |&(term, lag)| {
+                let tuner = Tuner {
+                    model: &rest.model,
+                    s,
+                    kind: term,
+                    parent: &rest.cv,
+                    seed: None,
+                    plan,
+                };
+                let (a, _) = term.candidate().tune(&tuner)?;
+                try_pair(a, lag, &rest, &against, s, plan)
+            });
+            let tried: Vec<(EffectKind, Scored)> = jobs
+                .iter()
+                .zip(outcomes)
+                .filter_map(|(&(term, _), p)| p.map(|p| (term, p)))
+                .collect();
+            for (_, p) in &tried {
+                let better = best.as_ref().is_none_or(|(_, _, q, _)| {
+                    Gain::of(&against, &p.errors()).mean > Gain::of(&against, &q.errors()).mean
+                });
+                if better {
+                    best = Some((i, rest.clone(), p.clone(), tried.clone()));
+                }
+            }
+        }
+        let Some((i, rest, pair, tried)) = best else {
+            return false;
+        };
+        let same_size = trials
+            .iter()
+            .filter(|t| t.evidence.admissible.is_ok())
+            .max_by(|a, b| {
+                Gain::of(&against, &a.evidence.errors)
+                    .mean
+                    .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
+            });
+        if same_size.is_some_and(|t| !select::separates(&t.evidence.errors, &pair.errors())) {
+            return false;
+        }
+        // A member's twins (the same column under another name: the pair with it instead
+        // scores alike) are ambiguous with it.
+        for (term, p) in &tried {
+            let n = p.model.effects.len();
+            let twin = p.scores.equation == pair.scores.equation
+                && !pair.model.has(*term)
+                && p.model.effects[n - 1].kind == pair.model.effects[n - 1].kind;
+            if twin {
+                let named = pair.model.effects[n - 2].kind;
+                self.found.ties.push(Tie {
+                    named,
+                    alternative: p.model.effects[n - 2],
+                });
+                self.excluded.push(*term);
+            }
+        }
+        let old = parent.model.effects[i].kind;
+        let n = pair.model.effects.len();
+        for k in [n - 2, n - 1] {
+            let e = pair.model.effects[k];
+            let estimate = fit_on_all(&pair.model, s)
+                .map(|f| judged(&pair.model, k, &f, s).0)
+                .unwrap_or(Estimate::new(f64::NAN, f64::NAN));
+            self.found.candidates.push(CandidateScore {
+                effect: e.kind,
+                round: self.round,
+                value: estimate.value,
+                stderr: estimate.stderr,
+                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
+                simulation_gain_percent: pooled_percent(
+                    &parent.scores.simulation,
+                    &pair.scores.simulation,
+                ),
+                gain: Gain::of(&against, &pair.errors()),
+                decision: Decision::Named,
+            });
+        }
+        self.found.notes.push(format!(
+            "{} and {} replaced {} after round {}: a term named first can stand in for a lag and another term, and together, in its place, they are the better model on held-out data",
+            pair.model.effects[n - 2].kind,
+            pair.model.effects[n - 1].kind,
+            old,
+            self.round
+        ));
+        self.drop_record(old, &parent, &rest);
+        for k in [n - 2, n - 1] {
+            self.found.entered_with.push((
+                pair.model.effects[k].kind,
+                pooled_percent(&parent.scores.equation, &pair.scores.equation),
+                Gain::of(&against, &pair.errors()),
+            ));
+            self.rivals.push((pair.model.effects[k].kind, Vec::new()));
+        }
+        self.adopt(pair);
+        true
+    }
+
     /// Records that `gone` left the model `with` (leaving `without`).
     fn drop_record(&mut self, gone: EffectKind, with: &Scored, without: &Scored) {
         self.found.candidates.push(CandidateScore {
@@ -793,6 +941,7 @@ fn try_pair(
     a: Effect,
     kind: EffectKind,
     parent: &Scored,
+    against: &FoldErrors,
     s: &Signals,
     plan: &SimPlan,
 ) -> Option<Scored> {
@@ -817,7 +966,7 @@ fn try_pair(
     let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
     let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;
     select::pair(
-        &parent.errors(),
+        against,
         &scored.errors(),
         &without_first.errors(),
         &without_second.errors(),
@@ -866,7 +1015,7 @@ pub(crate) fn search(
             break;
         }
         if let Some(trials) = search.forward() {
-            if !search.pairs(&trials) {
+            if !search.pairs(&trials) && !search.exchange_for_pair(&trials) {
                 search.unconfirmed(&trials);
                 break;
             }

@@ -52,6 +52,11 @@
 //!    above 2 and a positive offset nearly cancel over a narrow band of speeds) are named
 //!    together when the pair passes rules 1–4 against the model and each keeps its place by
 //!    rule 7.
+//! 10. A term named first can stand in for a lag and another term together (a constant torque
+//!     takes a lag's place beside a viscous friction), and a lag tried on top of it then gains
+//!     nothing: the search tries each term of a model without a lag **exchanged for a lag and one
+//!     of its rivals**, named by rule 9 against the model as it is and only where [`separates`]
+//!     prefers it to the best model of its size that keeps the term (`search::exchange_for_pair`).
 //!
 //! The search (`search`) stops when no effect or pair passes, or the model holds `max_effects`.
 //!
