@@ -50,8 +50,10 @@
 //!    narrow band of speeds: a friction and a viscous term, or an exponent and an offset).
 //! 9. Two effects that pass only together ([`pair`]: each masks the other, as a drag exponent
 //!    above 2 and a positive offset nearly cancel over a narrow band of speeds) are named
-//!    together when the pair passes rules 1–4 against the model and each keeps its place by
-//!    rule 7.
+//!    together when both are admissible, the pair's gain over the model is consistent (rule 3)
+//!    and at least [`MIN_GAIN`], and each keeps its place by rule 7. Rule 4's "equation silent"
+//!    is not asked of a pair: a sensor filter beside an offset gains in the simulated velocity
+//!    and loses 4 % in the equation against the viscous term it replaces (rule 10).
 //! 10. A term named first can stand in for a lag and another term together (a constant torque
 //!     takes a lag's place beside a viscous friction), and a lag tried on top of it then gains
 //!     nothing: the search tries each term of a model without a lag **exchanged for a lag and one

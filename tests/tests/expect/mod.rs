@@ -64,7 +64,7 @@ pub fn describe(r: &Report) -> String {
         .map(|m| format!("{}={:.4e}", m.effect, m.value))
         .collect();
     format!(
-        "{:?} [{}] ties [{}] near [{}] J {:.4e} c2 {:.4e}{} sim {:.2} → {:.2}{}{}",
+        "{:?} [{}] ties [{}] near [{}] J {:.4e} c2 {:.4e}{} sim {:.2} → {:.2}{}{}{}",
         r.verdict,
         effects.join(", "),
         ties.join(", "),
@@ -83,7 +83,13 @@ pub fn describe(r: &Report) -> String {
             l.from_s,
             l.to_s,
             100.0 * (l.inertia_with / r.extended.inertia - 1.0)
-        ))
+        )),
+        r.simulation_only
+            .as_ref()
+            .map_or(String::new(), |o| format!(
+                " simulation only {}={:.4e} (sim {:+.1} %, equation {:+.2} %)",
+                o.effect, o.value, o.simulation_gain_percent, o.equation_gain_percent
+            ))
     )
 }
 
