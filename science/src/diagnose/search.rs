@@ -564,7 +564,9 @@ impl Search<'_> {
         }
         let (s, plan) = (self.s, self.plan);
         let against = parent.errors();
-        let outcomes = in_parallel(&pairs, |&(a, b)| try_pair(a, b, &parent, &against, s, plan));
+        let outcomes = in_parallel(&pairs, |&(a, b)| {
+            try_pair(a, b, &parent, &against, None, s, plan)
+        });
         let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
             Gain::of(&parent.errors(), &x.errors())
                 .mean
@@ -762,6 +764,15 @@ impl Search<'_> {
             })
             .collect();
         let against = parent.errors();
+        let same_size = trials
+            .iter()
+            .filter(|t| t.evidence.admissible.is_ok())
+            .max_by(|a, b| {
+                Gain::of(&against, &a.evidence.errors)
+                    .mean
+                    .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
+            })
+            .map(|t| &t.evidence.errors);
         #[allow(clippy::type_complexity)]
         let mut best: Option<(usize, Scored, Scored, Vec<(EffectKind, Scored)>)> = None;
         for i in 0..parent.model.effects.len() {
@@ -799,7 +810,7 @@ impl Search<'_> {
                     plan,
                 };
                 let (a, _) = term.candidate().tune(&tuner)?;
-                try_pair(a, lag, &rest, &against, s, plan)
+                try_pair(a, lag, &rest, &against, Some(same_size), s, plan)
             });
             let tried: Vec<(EffectKind, Scored)> = jobs
                 .iter()
@@ -818,17 +829,7 @@ impl Search<'_> {
         let Some((i, rest, pair, tried)) = best else {
             return false;
         };
-        let same_size = trials
-            .iter()
-            .filter(|t| t.evidence.admissible.is_ok())
-            .max_by(|a, b| {
-                Gain::of(&against, &a.evidence.errors)
-                    .mean
-                    .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
-            });
-        if same_size.is_some_and(|t| !select::separates(&t.evidence.errors, &pair.errors())) {
-            return false;
-        }
+
         // A member's twins (the same column under another name: the pair with it instead
         // scores alike) are ambiguous with it.
         for (term, p) in &tried {
@@ -942,6 +943,7 @@ fn try_pair(
     kind: EffectKind,
     parent: &Scored,
     against: &FoldErrors,
+    same_size: Option<Option<&FoldErrors>>,
     s: &Signals,
     plan: &SimPlan,
 ) -> Option<Scored> {
@@ -965,13 +967,17 @@ fn try_pair(
     let scored = Scored::of(both, s, plan)?;
     let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
     let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;
-    select::pair(
-        against,
-        &scored.errors(),
-        &without_first.errors(),
-        &without_second.errors(),
-        admissible,
-    )
+    let (both, first, second) = (
+        scored.errors(),
+        without_first.errors(),
+        without_second.errors(),
+    );
+    match same_size {
+        // Rule 10: the pair in place of a term.
+        Some(kept) => select::exchange_for_pair(against, &both, &first, &second, admissible, kept),
+        // Rule 9: the pair beside the model.
+        None => select::pair(against, &both, &first, &second, admissible),
+    }
     .then_some(scored)
 }
 

@@ -534,6 +534,24 @@ pub fn pair(
         && keep(without_second, both)
 }
 
+/// Rule 10: whether a term of the model is exchanged for a pair (a lag and one of the term's
+/// rivals) whose model without the term scores `both`: the pair is named by rule 9 against the
+/// model as it is (`current`; `without_first`, `without_second`: the pair's model without each),
+/// and separated ([`separates`]) from `same_size`, the best model of its size that keeps the
+/// term (the term beside one admissible effect of the round; `None` when there is none). An
+/// exchange of one effect for two must beat what adding one effect to the model already does.
+pub fn exchange_for_pair(
+    current: &FoldErrors,
+    both: &FoldErrors,
+    without_first: &FoldErrors,
+    without_second: &FoldErrors,
+    admissible: bool,
+    same_size: Option<&FoldErrors>,
+) -> bool {
+    pair(current, both, without_first, without_second, admissible)
+        && same_size.is_none_or(|kept| separates(kept, both))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -915,6 +933,47 @@ mod tests {
         // The pair gains too little.
         let small = errors(about(0.99, 0.001), flat(1.0));
         assert!(!pair(&current, &small, &current, &current, true));
+    }
+
+    #[test]
+    fn rule_10_a_pair_replaces_a_term_only_beyond_what_one_more_effect_does() {
+        let current = parent();
+        let both = errors(about(0.5, 0.01), about(0.4, 0.01));
+        let without = errors(about(0.98, 0.01), about(0.95, 0.01));
+        // Nothing of its size to beat: rule 9 decides.
+        assert!(exchange_for_pair(
+            &current, &both, &without, &without, true, None
+        ));
+        // The term beside another effect does as well: no exchange (a drag exponent and an
+        // offset read as viscous friction and a 40 ms lag on the independent stand).
+        let kept = errors(about(0.51, 0.01), about(0.4, 0.01));
+        assert!(!exchange_for_pair(
+            &current,
+            &both,
+            &without,
+            &without,
+            true,
+            Some(&kept)
+        ));
+        // Clearly worse than the pair: the exchange is made.
+        let worse = errors(about(0.9, 0.01), about(0.85, 0.01));
+        assert!(exchange_for_pair(
+            &current,
+            &both,
+            &without,
+            &without,
+            true,
+            Some(&worse)
+        ));
+        // A pair rule 9 does not name is not exchanged, whatever it beats.
+        assert!(!exchange_for_pair(
+            &current,
+            &both,
+            &both,
+            &without,
+            true,
+            Some(&worse)
+        ));
     }
 
     #[test]
