@@ -58,7 +58,7 @@
 //!     takes a lag's place beside a viscous friction), and a lag tried on top of it then gains
 //!     nothing: the search tries each term of a model without a lag **exchanged for a lag and one
 //!     of its rivals**, named by rule 9 against the model as it is and only where [`separates`]
-//!     prefers it to the best model of its size that keeps the term (`search::exchange_for_pair`).
+//!     prefers it to the best model of its size that keeps the term ([`exchange_for_pair`]).
 //!
 //! The search (`search`) stops when no effect or pair passes, or the model holds `max_effects`.
 //!

@@ -26,6 +26,8 @@ use super::simulate::{fold_scores, FoldScores, SimPlan};
 use super::tune::{objective_of, Tuner};
 use super::{Observer, Stage};
 
+mod pairs;
+
 /// How one effect scored when it was tried.
 #[derive(Clone, Debug, Serialize)]
 pub struct CandidateScore {
@@ -350,15 +352,6 @@ fn retune(m: Model, s: &Signals, plan: &SimPlan, skip: Option<usize>) -> Model {
     model
 }
 
-/// The candidates a pair look-ahead combines: the best this many of a round that named nothing,
-/// by held-out acceleration gain (a bound on its cost, not a rule of the decision).
-const PAIR_CANDIDATES: usize = 3;
-
-/// Pairs are tried only after a round whose best candidate lowered the held-out acceleration
-/// error by at least this share: an effect that masks another still moves the fit (a cost
-/// bound: data with nothing left to explain try no pairs).
-const PAIR_WORTH: f64 = 0.01;
-
 /// Rivals of a named effect tried in its place (rule 8): those that passed rules 1–4 in the
 /// round it was named with at least this share of its gain (a bound on the cost).
 const RIVAL_SHARE: f64 = 0.5;
@@ -525,110 +518,6 @@ impl Search<'_> {
         None
     }
 
-    /// Rule 9 after a round that named nothing (`trials`): the best pairs of its candidates;
-    /// whether a pair was named.
-    fn pairs(&mut self, trials: &[Trial]) -> bool {
-        if self.current.model.effects.len() + 2 > self.max_effects {
-            return false;
-        }
-        let parent = self.current.clone();
-        let worth = trials.iter().any(|t| {
-            t.scored.scores.equation_pooled < (1.0 - PAIR_WORTH) * parent.scores.equation_pooled
-        });
-        if !worth {
-            return false;
-        }
-        let mut best: Vec<&Trial> = Vec::new();
-        let mut ranked: Vec<&Trial> = trials.iter().collect();
-        ranked.sort_by(|a, b| {
-            a.scored
-                .scores
-                .equation_pooled
-                .total_cmp(&b.scored.scores.equation_pooled)
-        });
-        for t in ranked {
-            // A twin (the same column under another name) adds no other pair.
-            if best.len() < PAIR_CANDIDATES
-                && !best
-                    .iter()
-                    .any(|b| b.scored.scores.equation == t.scored.scores.equation)
-            {
-                best.push(t);
-            }
-        }
-        let mut pairs = Vec::new();
-        for i in 0..best.len() {
-            for j in i + 1..best.len() {
-                pairs.push((best[i].effect, best[j].effect.kind));
-            }
-        }
-        let (s, plan) = (self.s, self.plan);
-        let against = parent.errors();
-        let outcomes = in_parallel(&pairs, |&(a, b)| {
-            try_pair(a, b, &parent, &against, None, s, plan)
-        });
-        let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
-            Gain::of(&parent.errors(), &x.errors())
-                .mean
-                .total_cmp(&Gain::of(&parent.errors(), &y.errors()).mean)
-        }) else {
-            return false;
-        };
-        let n = pair.model.effects.len();
-        for k in [n - 2, n - 1] {
-            let e = pair.model.effects[k];
-            let fit = fit_on_all(&pair.model, s);
-            let (estimate, _) = fit
-                .as_ref()
-                .map(|f| judged(&pair.model, k, f, s))
-                .unwrap_or((Estimate::new(f64::NAN, f64::NAN), Ok(())));
-            self.found.candidates.push(CandidateScore {
-                effect: e.kind,
-                round: self.round,
-                value: estimate.value,
-                stderr: estimate.stderr,
-                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                simulation_gain_percent: pooled_percent(
-                    &parent.scores.simulation,
-                    &pair.scores.simulation,
-                ),
-                gain: Gain::of(&parent.errors(), &pair.errors()),
-                decision: Decision::Named,
-            });
-            self.found.entered_with.push((
-                e.kind,
-                pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                Gain::of(&parent.errors(), &pair.errors()),
-            ));
-            self.rivals.push((e.kind, Vec::new()));
-        }
-        // A member's twins (the same column under another name) are ambiguous with it.
-        for k in [n - 2, n - 1] {
-            let member = pair.model.effects[k].kind;
-            let Some(single) = trials.iter().find(|t| t.effect.kind == member) else {
-                continue;
-            };
-            for t in trials {
-                if t.effect.kind != member
-                    && t.scored.scores.equation == single.scored.scores.equation
-                {
-                    self.found.ties.push(Tie {
-                        named: member,
-                        alternative: t.effect,
-                    });
-                    self.excluded.push(t.effect.kind);
-                }
-            }
-        }
-        self.found.notes.push(format!(
-            "{} and {} were named together: neither gains alone, each masks the other",
-            pair.model.effects[n - 2].kind,
-            pair.model.effects[n - 1].kind
-        ));
-        self.adopt(pair);
-        true
-    }
-
     /// Records the candidates of the round that ended the search (`trials`, tried on the model
     /// as it is) that only rule 4 kept from being named.
     fn unconfirmed(&mut self, trials: &[Trial]) {
@@ -741,152 +630,6 @@ impl Search<'_> {
         }
     }
 
-    /// Rule 10, after a round that named nothing, alone or in pairs: a term named first can stand
-    /// in for a lag and another term together (a constant torque takes a lag's place beside a
-    /// viscous friction; a viscous term a current-sense filter's beside an offset), and a lag
-    /// tried on top of it then gains nothing. Each term of the model is tried exchanged for a
-    /// lag and one of the terms it outdid when it was named (its rivals), the pair named by rule
-    /// 9 against the model as it is, and separated (rule 5) from the best model of its size that
-    /// keeps the term (the term beside one admissible effect of the round, `trials`): the best such
-    /// exchange is made. Whether it named a pair.
-    fn exchange_for_pair(&mut self, trials: &[Trial]) -> bool {
-        use super::candidate::Slot;
-        let parent = self.current.clone();
-        if parent.model.effects.len() + 1 > self.max_effects || parent.model.has_lag() {
-            return false;
-        }
-        let (s, plan) = (self.s, self.plan);
-        let lags: Vec<EffectKind> = EffectKind::searched()
-            .filter(|k| {
-                k.candidate().slot() == Slot::Lag
-                    && k.refines().is_none()
-                    && !self.excluded.contains(k)
-            })
-            .collect();
-        let against = parent.errors();
-        let same_size = trials
-            .iter()
-            .filter(|t| t.evidence.admissible.is_ok())
-            .max_by(|a, b| {
-                Gain::of(&against, &a.evidence.errors)
-                    .mean
-                    .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
-            })
-            .map(|t| &t.evidence.errors);
-        #[allow(clippy::type_complexity)]
-        let mut best: Option<(usize, Scored, Scored, Vec<(EffectKind, Scored)>)> = None;
-        for i in 0..parent.model.effects.len() {
-            let old = parent.model.effects[i];
-            if old.candidate().slot() != Slot::Term {
-                continue;
-            }
-            let terms: Vec<EffectKind> = self
-                .rivals
-                .iter()
-                .find(|(k, _)| *k == old.kind)
-                .map(|(_, r)| r.clone())
-                .unwrap_or_default()
-                .into_iter()
-                .filter(|k| k.candidate().slot() == Slot::Term && !parent.model.has(*k))
-                .collect();
-            if terms.is_empty() {
-                continue;
-            }
-            let Some(rest) = Scored::of(parent.model.without(i), s, plan) else {
-                continue;
-            };
-            let jobs: Vec<(EffectKind, EffectKind)> = terms
-                .iter()
-                .flat_map(|&t| lags.iter().map(move |&l| (t, l)))
-                .collect();
-            COUNTS[1].fetch_add(jobs.len(), Ordering::Relaxed);
-            let outcomes = in_parallel(&jobs, |&(term, lag)| {
-                let tuner = Tuner {
-                    model: &rest.model,
-                    s,
-                    kind: term,
-                    parent: &rest.cv,
-                    seed: None,
-                    plan,
-                };
-                let (a, _) = term.candidate().tune(&tuner)?;
-                try_pair(a, lag, &rest, &against, Some(same_size), s, plan)
-            });
-            let tried: Vec<(EffectKind, Scored)> = jobs
-                .iter()
-                .zip(outcomes)
-                .filter_map(|(&(term, _), p)| p.map(|p| (term, p)))
-                .collect();
-            for (_, p) in &tried {
-                let better = best.as_ref().is_none_or(|(_, _, q, _)| {
-                    Gain::of(&against, &p.errors()).mean > Gain::of(&against, &q.errors()).mean
-                });
-                if better {
-                    best = Some((i, rest.clone(), p.clone(), tried.clone()));
-                }
-            }
-        }
-        let Some((i, rest, pair, tried)) = best else {
-            return false;
-        };
-
-        // A member's twins (the same column under another name: the pair with it instead
-        // scores alike) are ambiguous with it.
-        for (term, p) in &tried {
-            let n = p.model.effects.len();
-            let twin = p.scores.equation == pair.scores.equation
-                && !pair.model.has(*term)
-                && p.model.effects[n - 1].kind == pair.model.effects[n - 1].kind;
-            if twin {
-                let named = pair.model.effects[n - 2].kind;
-                self.found.ties.push(Tie {
-                    named,
-                    alternative: p.model.effects[n - 2],
-                });
-                self.excluded.push(*term);
-            }
-        }
-        let old = parent.model.effects[i].kind;
-        let n = pair.model.effects.len();
-        for k in [n - 2, n - 1] {
-            let e = pair.model.effects[k];
-            let estimate = fit_on_all(&pair.model, s)
-                .map(|f| judged(&pair.model, k, &f, s).0)
-                .unwrap_or(Estimate::new(f64::NAN, f64::NAN));
-            self.found.candidates.push(CandidateScore {
-                effect: e.kind,
-                round: self.round,
-                value: estimate.value,
-                stderr: estimate.stderr,
-                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                simulation_gain_percent: pooled_percent(
-                    &parent.scores.simulation,
-                    &pair.scores.simulation,
-                ),
-                gain: Gain::of(&against, &pair.errors()),
-                decision: Decision::Named,
-            });
-        }
-        self.found.notes.push(format!(
-            "{} and {} replaced {} after round {}: a term named first can stand in for a lag and another term, and together, in its place, they are the better model on held-out data",
-            pair.model.effects[n - 2].kind,
-            pair.model.effects[n - 1].kind,
-            old,
-            self.round
-        ));
-        self.drop_record(old, &parent, &rest);
-        for k in [n - 2, n - 1] {
-            self.found.entered_with.push((
-                pair.model.effects[k].kind,
-                pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                Gain::of(&against, &pair.errors()),
-            ));
-            self.rivals.push((pair.model.effects[k].kind, Vec::new()));
-        }
-        self.adopt(pair);
-        true
-    }
-
     /// Records that `gone` left the model `with` (leaving `without`).
     fn drop_record(&mut self, gone: EffectKind, with: &Scored, without: &Scored) {
         self.found.candidates.push(CandidateScore {
@@ -934,51 +677,6 @@ impl Search<'_> {
             self.adopt(without);
         }
     }
-}
-
-/// `a` (tuned on `parent`) and `kind` tuned on the model with it, re-tuned jointly: the pair's
-/// model, when rule 9 names it.
-fn try_pair(
-    a: Effect,
-    kind: EffectKind,
-    parent: &Scored,
-    against: &FoldErrors,
-    same_size: Option<Option<&FoldErrors>>,
-    s: &Signals,
-    plan: &SimPlan,
-) -> Option<Scored> {
-    COUNTS[1].fetch_add(1, Ordering::Relaxed);
-    let with_a = parent.model.with(a)?;
-    let cv = cross_validate(&with_a, s)?;
-    let tuner = Tuner {
-        model: &with_a,
-        s,
-        kind,
-        parent: &cv,
-        seed: None,
-        plan,
-    };
-    let (b, _) = kind.candidate().tune(&tuner)?;
-    let both = retune(with_a.with(b)?, s, plan, None);
-    let n = both.effects.len();
-    let fit = fit_on_all(&both, s)?;
-    let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())
-        && spoiled(&both, n - 1, &fit).is_none();
-    let scored = Scored::of(both, s, plan)?;
-    let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
-    let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;
-    let (both, first, second) = (
-        scored.errors(),
-        without_first.errors(),
-        without_second.errors(),
-    );
-    match same_size {
-        // Rule 10: the pair in place of a term.
-        Some(kept) => select::exchange_for_pair(against, &both, &first, &second, admissible, kept),
-        // Rule 9: the pair beside the model.
-        None => select::pair(against, &both, &first, &second, admissible),
-    }
-    .then_some(scored)
 }
 
 /// The stepwise search (see the module documentation).
