@@ -516,9 +516,8 @@ const SINE_PAIR_LIMITS: &[(&str, u64, &str)] = &[
 
 /// A constant torque named in the first round takes most of the lag's effect on one sinusoid;
 /// the lag, re-tuned on top of it, no longer passes (as on the independent stand's
-/// `lag_viscous`). Rule 10 exchanges the constant for the lag and the viscous term where that
-/// pair is separated from every model of its size that keeps the constant (right on the other
-/// draw); here it is not, and the verdict is ambiguous.
+/// `lag_viscous`). Rule 10 exchanges the constant for the lag and the viscous term on the other
+/// draw (right there); on this one it makes no exchange, and the verdict is ambiguous.
 const LAG_TAKEN: &str = "a constant torque takes the lag beside a viscous term";
 
 /// Over the sine's band of speeds a constant, ω and ω^p (and, beside a sensor filter, the

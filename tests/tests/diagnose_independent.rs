@@ -128,7 +128,9 @@ const SILENTLY_WRONG: &[(&str, u64)] = &[];
 /// on the sine (a Coulomb friction is named in the first round, beside which the lag, re-tuned,
 /// no longer passes). Rule 10 exchanges the Coulomb friction for the lag and the viscous term on
 /// seed 1 (right) and seed 2 (both named, the lag 11.2 ms, 12 % long; J and c2 within 1 %); on
-/// seeds 3–6 the pair is not separated from the Coulomb friction beside another effect. Each lag's time constant is tuned by both held-out errors (the simulated
+/// seeds 3–6 no exchange is made (on seed 4 the pair is not separated from the Coulomb friction
+/// beside another effect; on 3, 5 and 6 no pair passes rule 9). Each lag's time constant is
+/// tuned by both held-out errors (the simulated
 /// velocity's too) since the equation's alone, dominated by this stand's acceleration noise,
 /// tuned a 15 ms lag to 0.4 ms.
 const LAG_UNDER_A_TERM: &str = "a lag beside a torque term that absorbs it in the first round";
