@@ -551,6 +551,15 @@ impl Search<'_> {
         self.found.unconfirmed = found;
     }
 
+    /// The rivals effect `kind` passed in the round it was named (none if it has no record).
+    fn rivals_of(&self, kind: EffectKind) -> Vec<EffectKind> {
+        self.rivals
+            .iter()
+            .find(|(k, _)| *k == kind)
+            .map(|(_, r)| r.clone())
+            .unwrap_or_default()
+    }
+
     /// Rule 8 for every effect but the newest: its rivals in its place.
     fn exchange(&mut self) {
         let newest = self.current.model.effects.len().saturating_sub(1);
@@ -560,11 +569,7 @@ impl Search<'_> {
             let rest = Scored::of(parent.model.without(i), self.s, self.plan);
             let Some(rest) = rest else { continue };
             let rivals: Vec<EffectKind> = self
-                .rivals
-                .iter()
-                .find(|(k, _)| *k == old.kind)
-                .map(|(_, r)| r.clone())
-                .unwrap_or_default()
+                .rivals_of(old.kind)
                 .into_iter()
                 // Any rival not in the model, tied with another effect or not: an exchange is
                 // where a tie of the rounds before is settled.

@@ -67,33 +67,7 @@ impl Search<'_> {
             return false;
         };
         let n = pair.model.effects.len();
-        for k in [n - 2, n - 1] {
-            let e = pair.model.effects[k];
-            let fit = fit_on_all(&pair.model, s);
-            let (estimate, _) = fit
-                .as_ref()
-                .map(|f| judged(&pair.model, k, f, s))
-                .unwrap_or((Estimate::new(f64::NAN, f64::NAN), Ok(())));
-            self.found.candidates.push(CandidateScore {
-                effect: e.kind,
-                round: self.round,
-                value: estimate.value,
-                stderr: estimate.stderr,
-                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                simulation_gain_percent: pooled_percent(
-                    &parent.scores.simulation,
-                    &pair.scores.simulation,
-                ),
-                gain: Gain::of(&parent.errors(), &pair.errors()),
-                decision: Decision::Named,
-            });
-            self.found.entered_with.push((
-                e.kind,
-                pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                Gain::of(&parent.errors(), &pair.errors()),
-            ));
-            self.rivals.push((e.kind, Vec::new()));
-        }
+        self.named_pair(&parent, &pair);
         // A member's twins (the same column under another name) are ambiguous with it.
         for k in [n - 2, n - 1] {
             let member = pair.model.effects[k].kind;
@@ -153,18 +127,14 @@ impl Search<'_> {
             })
             .map(|t| &t.evidence.errors);
         #[allow(clippy::type_complexity)]
-        let mut best: Option<(usize, Scored, Scored, Vec<(EffectKind, Scored)>)> = None;
+        let mut best: Option<(usize, Scored, Vec<(EffectKind, Scored)>, usize)> = None;
         for i in 0..parent.model.effects.len() {
             let old = parent.model.effects[i];
             if old.candidate().slot() != Slot::Term {
                 continue;
             }
             let terms: Vec<EffectKind> = self
-                .rivals
-                .iter()
-                .find(|(k, _)| *k == old.kind)
-                .map(|(_, r)| r.clone())
-                .unwrap_or_default()
+                .rivals_of(old.kind)
                 .into_iter()
                 .filter(|k| k.candidate().slot() == Slot::Term && !parent.model.has(*k))
                 .collect();
@@ -178,7 +148,6 @@ impl Search<'_> {
                 .iter()
                 .flat_map(|&t| lags.iter().map(move |&l| (t, l)))
                 .collect();
-            COUNTS[1].fetch_add(jobs.len(), Ordering::Relaxed);
             let outcomes = in_parallel(&jobs, |&(term, lag)| {
                 let tuner = Tuner {
                     model: &rest.model,
@@ -196,18 +165,28 @@ impl Search<'_> {
                 .zip(outcomes)
                 .filter_map(|(&(term, _), p)| p.map(|p| (term, p)))
                 .collect();
-            for (_, p) in &tried {
-                let better = best.as_ref().is_none_or(|(_, _, q, _)| {
-                    Gain::of(&against, &p.errors()).mean > Gain::of(&against, &q.errors()).mean
-                });
-                if better {
-                    best = Some((i, rest.clone(), p.clone(), tried.clone()));
+            let gain = |p: &Scored| Gain::of(&against, &p.errors()).mean;
+            // The first best of this term's pairs, kept where it beats the terms' before.
+            let Some(top) = (0..tried.len()).reduce(|a, b| {
+                if gain(&tried[b].1) > gain(&tried[a].1) {
+                    b
+                } else {
+                    a
                 }
+            }) else {
+                continue;
+            };
+            if best
+                .as_ref()
+                .is_none_or(|(_, _, t, k)| gain(&tried[top].1) > gain(&t[*k].1))
+            {
+                best = Some((i, rest, tried, top));
             }
         }
-        let Some((i, rest, pair, tried)) = best else {
+        let Some((i, rest, tried, top)) = best else {
             return false;
         };
+        let pair = tried[top].1.clone();
 
         // A member's twins (the same column under another name: the pair with it instead
         // scores alike) are ambiguous with it.
@@ -227,25 +206,7 @@ impl Search<'_> {
         }
         let old = parent.model.effects[i].kind;
         let n = pair.model.effects.len();
-        for k in [n - 2, n - 1] {
-            let e = pair.model.effects[k];
-            let estimate = fit_on_all(&pair.model, s)
-                .map(|f| judged(&pair.model, k, &f, s).0)
-                .unwrap_or(Estimate::new(f64::NAN, f64::NAN));
-            self.found.candidates.push(CandidateScore {
-                effect: e.kind,
-                round: self.round,
-                value: estimate.value,
-                stderr: estimate.stderr,
-                cv_gain_percent: pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                simulation_gain_percent: pooled_percent(
-                    &parent.scores.simulation,
-                    &pair.scores.simulation,
-                ),
-                gain: Gain::of(&against, &pair.errors()),
-                decision: Decision::Named,
-            });
-        }
+        self.named_pair(&parent, &pair);
         self.found.notes.push(format!(
             "{} and {} replaced {} after round {}: a term named first can stand in for a lag and another term, and together, in its place, they are the better model on held-out data",
             pair.model.effects[n - 2].kind,
@@ -254,16 +215,40 @@ impl Search<'_> {
             self.round
         ));
         self.drop_record(old, &parent, &rest);
-        for k in [n - 2, n - 1] {
-            self.found.entered_with.push((
-                pair.model.effects[k].kind,
-                pooled_percent(&parent.scores.equation, &pair.scores.equation),
-                Gain::of(&against, &pair.errors()),
-            ));
-            self.rivals.push((pair.model.effects[k].kind, Vec::new()));
-        }
         self.adopt(pair);
         true
+    }
+
+    /// Records that the two effects ending `pair`'s model were named together over `parent`
+    /// (rule 9 or 10): each one's value from the pair's joint fit, the pair's gain as its entry
+    /// gain, and no rivals.
+    fn named_pair(&mut self, parent: &Scored, pair: &Scored) {
+        let n = pair.model.effects.len();
+        let gain = Gain::of(&parent.errors(), &pair.errors());
+        let cv_gain_percent = pooled_percent(&parent.scores.equation, &pair.scores.equation);
+        let simulation_gain_percent =
+            pooled_percent(&parent.scores.simulation, &pair.scores.simulation);
+        let fit = fit_on_all(&pair.model, self.s);
+        for k in [n - 2, n - 1] {
+            let effect = pair.model.effects[k].kind;
+            let estimate = fit.as_ref().map_or(Estimate::new(f64::NAN, f64::NAN), |f| {
+                judged(&pair.model, k, f, self.s).0
+            });
+            self.found.candidates.push(CandidateScore {
+                effect,
+                round: self.round,
+                value: estimate.value,
+                stderr: estimate.stderr,
+                cv_gain_percent,
+                simulation_gain_percent,
+                gain,
+                decision: Decision::Named,
+            });
+            self.found
+                .entered_with
+                .push((effect, cv_gain_percent, gain));
+            self.rivals.push((effect, Vec::new()));
+        }
     }
 }
 
