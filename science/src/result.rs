@@ -204,12 +204,17 @@ impl Outcome {
             .effects
             .iter()
             .map(|e| {
+                // An alternative without the effect reads it as zero (a twin in its place, or
+                // a term and a lag).
                 let alternatives = r
                     .ambiguities
                     .iter()
-                    .flat_map(|a| &a.alternative_effects)
-                    .filter(|v| v.effect == e.effect)
-                    .map(|v| (v.value - e.value).abs())
+                    .map(|a| {
+                        a.alternative_effects
+                            .iter()
+                            .find(|v| v.effect == e.effect)
+                            .map_or(e.value.abs(), |v| (v.value - e.value).abs())
+                    })
                     .filter(|d| d.is_finite())
                     .fold(0.0, f64::max);
                 Effect {

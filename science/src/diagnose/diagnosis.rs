@@ -12,7 +12,7 @@ use super::report::{
     Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
     ResidualAnalysis, SimulationOnly, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
 };
-use super::search::{estimate_of, search, Found, Scored};
+use super::search::{estimate_of, search, Found, Scored, Tie};
 use super::select::{self, Decision, Evidence};
 use super::signals::{correlation, Signals};
 use super::simulate::{rms_error, simulate, SimPlan};
@@ -197,17 +197,7 @@ pub(crate) fn run(
     let ambiguities = found
         .ties
         .iter()
-        .filter_map(|t| {
-            ambiguity(
-                &found,
-                &model,
-                &ext_fit,
-                &extended,
-                t.named,
-                t.alternative,
-                s,
-            )
-        })
+        .filter_map(|t| ambiguity(&found, &model, &ext_fit, &extended, t, s))
         .collect();
     let near_misses = near_misses(&found);
 
@@ -341,20 +331,24 @@ fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<S
     })
 }
 
-/// The ambiguity between `named` (in `model`, fitted as `fit`) and `alternative`: both values,
-/// J and c2 with each, what they agree on, and the run that separates them.
+/// The ambiguity `tie` records between an effect of `model` (fitted as `fit`) and its
+/// alternative (with the lag beside it, for rule 10's tie): the values, J and c2 with each, what
+/// they agree on, and the run that separates them.
 fn ambiguity(
     found: &Found,
     model: &Model,
     fit: &Fit,
     extended: &BaseModel,
-    named: EffectKind,
-    alternative: Effect,
+    tie: &Tie,
     s: &Signals,
 ) -> Option<Ambiguity> {
+    let (named, alternative) = (tie.named, tie.alternative);
     let i = model.effects.iter().position(|e| e.kind == named)?;
     let mut other = model.without(i);
     other.effects.insert(i, alternative);
+    if let Some(lag) = tie.alongside {
+        other = other.with(lag)?;
+    }
     let other_fit = fit_on_all(&other, s)?;
     let other_base = base_model_of(&other_fit, &other, s);
     let gain_of = |k: EffectKind| {
@@ -372,17 +366,13 @@ fn ambiguity(
         inertia: 0.5 * (a.inertia + b.inertia),
         c2: 0.5 * (a.c2 + b.c2),
     });
-    let run = separating_run(named, alternative.kind);
-    let alternative_effects = other
-        .effects
-        .iter()
-        .enumerate()
-        .map(|(k, e)| EffectValue {
-            effect: e.kind,
-            value: estimate_of(&other, k, &other_fit, s).value,
-            unit: e.kind.unit(),
-        })
-        .collect();
+    let run = separating_run(named, tie.alongside.unwrap_or(alternative).kind);
+    let value_of = |k: usize| EffectValue {
+        effect: other.effects[k].kind,
+        value: estimate_of(&other, k, &other_fit, s).value,
+        unit: other.effects[k].kind.unit(),
+    };
+    let alternative_effects = (0..other.effects.len()).map(value_of).collect();
     Some(Ambiguity {
         between: [named, alternative.kind],
         values: [
@@ -390,7 +380,10 @@ fn ambiguity(
             estimate_of(&other, i, &other_fit, s).value,
         ],
         units: [named.unit(), alternative.kind.unit()],
-        cv_gain_percent: [gain_of(named), gain_of(alternative.kind)],
+        alongside: tie.alongside.map(|_| value_of(other.effects.len() - 1)),
+        cv_gain_percent: tie
+            .cv_gain_percent
+            .unwrap_or([gain_of(named), gain_of(alternative.kind)]),
         alternative: other_base.clone(),
         alternative_effects,
         agreed,

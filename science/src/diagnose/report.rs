@@ -217,7 +217,12 @@ pub struct Ambiguity {
     pub values: [f64; 2],
     /// Units of the estimates.
     pub units: [&'static str; 2],
-    /// Held-out acceleration gains when they were tried [%].
+    /// The lag the alternative model holds beside the second effect, when the data cannot tell
+    /// the first from the two together (a constant torque, or a viscous friction and a lag);
+    /// `None` when the second alone stands in place of the first.
+    pub alongside: Option<EffectValue>,
+    /// Held-out acceleration gains when they were tried [%] (for an alternative with a lag
+    /// beside it: each model's over the model without the first).
     pub cv_gain_percent: [f64; 2],
     /// The extended model with the second in place of the first (its J, c2, drag law).
     pub alternative: BaseModel,

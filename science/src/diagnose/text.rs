@@ -171,8 +171,11 @@ pub fn to_text(r: &Report, source: &str) -> String {
         );
     }
     for a in &r.ambiguities {
+        let beside = a.alongside.as_ref().map_or(String::new(), |l| {
+            format!(" with {} = {:.4e} {}", l.effect, l.value, l.unit)
+        });
         s += &format!(
-            "   Ambiguous: {} = {:.4e} {} (in the model) or {} = {:.4e} {}: the held-out data cannot tell the two\n   \
+            "   Ambiguous: {} = {:.4e} {} (in the model) or {} = {:.4e} {}{beside}: the held-out data cannot tell the two\n   \
              apart (gains {:.2} % and {:.2} % on the acceleration, and no significant difference in the simulation). ",
             a.between[0], a.values[0], a.units[0], a.between[1], a.values[1], a.units[1],
             a.cv_gain_percent[0], a.cv_gain_percent[1]

@@ -56,7 +56,17 @@ pub fn describe(r: &Report) -> String {
     let ties: Vec<String> = r
         .ambiguities
         .iter()
-        .map(|a| format!("{}|{}={:.4e}", a.between[0], a.between[1], a.values[1]))
+        .map(|a| {
+            format!(
+                "{}|{}={:.4e}{}",
+                a.between[0],
+                a.between[1],
+                a.values[1],
+                a.alongside
+                    .as_ref()
+                    .map_or(String::new(), |l| format!("+{}={:.4e}", l.effect, l.value))
+            )
+        })
         .collect();
     let near: Vec<String> = r
         .near_misses

@@ -81,13 +81,31 @@ fn errors_of(s: &FoldScores) -> FoldErrors {
     }
 }
 
-/// An effect the data cannot tell from one in the model.
+/// An effect the data cannot tell from one in the model (or a term and a lag in its place,
+/// rule 10's tie).
 #[derive(Clone, Debug)]
 pub(crate) struct Tie {
     /// The effect in the model.
     pub named: EffectKind,
     /// The alternative, as tuned.
     pub alternative: Effect,
+    /// The lag the alternative holds beside it (rule 10's tie), as tuned with it.
+    pub alongside: Option<Effect>,
+    /// The held-out acceleration gains of the named effect and of the alternative over the model
+    /// without either [%], where they were not each a candidate's of one round (rule 10's tie).
+    pub cv_gain_percent: Option<[f64; 2]>,
+}
+
+impl Tie {
+    /// `alternative` in place of `named`.
+    pub fn of(named: EffectKind, alternative: Effect) -> Tie {
+        Tie {
+            named,
+            alternative,
+            alongside: None,
+            cv_gain_percent: None,
+        }
+    }
 }
 
 /// What the search found.
@@ -491,10 +509,7 @@ impl Search<'_> {
         };
         for (t, d) in trials.iter().zip(&step.decisions) {
             if let Decision::Ambiguous { with } = d {
-                self.found.ties.push(Tie {
-                    named: *with,
-                    alternative: t.effect,
-                });
+                self.found.ties.push(Tie::of(*with, t.effect));
                 self.excluded.push(t.effect.kind);
             }
         }
@@ -610,10 +625,7 @@ impl Search<'_> {
                             .iter()
                             .any(|x| x.named == old.kind && x.alternative.kind == t.effect.kind)
                         {
-                            self.found.ties.push(Tie {
-                                named: old.kind,
-                                alternative: t.effect,
-                            });
+                            self.found.ties.push(Tie::of(old.kind, t.effect));
                         }
                         self.excluded.push(t.effect.kind);
                     }

@@ -57,7 +57,9 @@ impl Search<'_> {
         let (s, plan) = (self.s, self.plan);
         let against = parent.errors();
         let outcomes = in_parallel(&pairs, |&(a, b)| {
-            try_pair(a, b, &parent, &against, None, s, plan)
+            try_pair(a, b, &parent, s, plan)
+                .filter(|p| p.named_beside(&against))
+                .map(|p| p.scored)
         });
         let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
             Gain::of(&parent.errors(), &x.errors())
@@ -78,10 +80,7 @@ impl Search<'_> {
                 if t.effect.kind != member
                     && t.scored.scores.equation == single.scored.scores.equation
                 {
-                    self.found.ties.push(Tie {
-                        named: member,
-                        alternative: t.effect,
-                    });
+                    self.found.ties.push(Tie::of(member, t.effect));
                     self.excluded.push(t.effect.kind);
                 }
             }
@@ -102,7 +101,8 @@ impl Search<'_> {
     /// lag and one of the terms it outdid when it was named (its rivals), the pair named by rule
     /// 9 against the model as it is, and separated (rule 5) from the best model of its size that
     /// keeps the term (the term beside one admissible effect of the round, `trials`): the best such
-    /// exchange is made. Whether it named a pair.
+    /// exchange is made. Where none is, the best pair the data cannot tell from the model as it
+    /// is (`select::pair_tie`) is recorded as ambiguous with its term. Whether it named a pair.
     pub(super) fn exchange_for_pair(&mut self, trials: &[Trial]) -> bool {
         let parent = self.current.clone();
         if parent.model.effects.len() + 1 > self.max_effects || parent.model.has_lag() {
@@ -126,8 +126,10 @@ impl Search<'_> {
                     .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
             })
             .map(|t| &t.evidence.errors);
-        #[allow(clippy::type_complexity)]
-        let mut best: Option<(usize, Scored, Vec<(EffectKind, Scored)>, usize)> = None;
+        let gain = |p: &PairTrial| Gain::of(&against, &p.scored.errors()).mean;
+        // Every exchange tried: the term's index, the model without it, and its pairs (each with
+        // the rival in it).
+        let mut exchanges: Vec<(usize, Scored, Vec<(EffectKind, PairTrial)>)> = Vec::new();
         for i in 0..parent.model.effects.len() {
             let old = parent.model.effects[i];
             if old.candidate().slot() != Slot::Term {
@@ -158,49 +160,62 @@ impl Search<'_> {
                     plan,
                 };
                 let (a, _) = term.candidate().tune(&tuner)?;
-                try_pair(a, lag, &rest, &against, Some(same_size), s, plan)
+                try_pair(a, lag, &rest, s, plan)
             });
-            let tried: Vec<(EffectKind, Scored)> = jobs
+            let tried = jobs
                 .iter()
                 .zip(outcomes)
                 .filter_map(|(&(term, _), p)| p.map(|p| (term, p)))
                 .collect();
-            let gain = |p: &Scored| Gain::of(&against, &p.errors()).mean;
-            // The first best of this term's pairs, kept where it beats the terms' before.
-            let Some(top) = (0..tried.len()).reduce(|a, b| {
-                if gain(&tried[b].1) > gain(&tried[a].1) {
-                    b
-                } else {
-                    a
-                }
-            }) else {
-                continue;
-            };
-            if best
-                .as_ref()
-                .is_none_or(|(_, _, t, k)| gain(&tried[top].1) > gain(&t[*k].1))
-            {
-                best = Some((i, rest, tried, top));
-            }
+            exchanges.push((i, rest, tried));
         }
-        let Some((i, rest, tried, top)) = best else {
+        // The best exchange rule 10 names; else the best pair tied with the model.
+        let best_where = |ok: &dyn Fn(&PairTrial) -> bool| {
+            let mut best: Option<(usize, usize)> = None;
+            for (e, (_, _, tried)) in exchanges.iter().enumerate() {
+                for (k, (_, p)) in tried.iter().enumerate() {
+                    // The first best, as the terms and their pairs were tried.
+                    if ok(p) && best.is_none_or(|(be, bk)| gain(p) > gain(&exchanges[be].2[bk].1)) {
+                        best = Some((e, k));
+                    }
+                }
+            }
+            best
+        };
+        let Some((e, top)) = best_where(&|p| p.named_instead(&against, same_size)) else {
+            if let Some((e, top)) = best_where(&|p| p.tied_with(&against)) {
+                let (i, rest, tried) = &exchanges[e];
+                let pair = &tried[top].1.scored;
+                let n = pair.model.effects.len();
+                self.found.ties.push(Tie {
+                    named: parent.model.effects[*i].kind,
+                    alternative: pair.model.effects[n - 2],
+                    alongside: Some(pair.model.effects[n - 1]),
+                    cv_gain_percent: Some([
+                        pooled_percent(&rest.scores.equation, &parent.scores.equation),
+                        pooled_percent(&rest.scores.equation, &pair.scores.equation),
+                    ]),
+                });
+            }
             return false;
         };
-        let pair = tried[top].1.clone();
+        let (i, rest, tried) = exchanges.swap_remove(e);
+        let pair = tried[top].1.scored.clone();
 
         // A member's twins (the same column under another name: the pair with it instead
         // scores alike) are ambiguous with it.
-        for (term, p) in &tried {
+        for (term, p) in tried
+            .iter()
+            .filter(|(_, p)| p.named_instead(&against, same_size))
+        {
+            let p = &p.scored;
             let n = p.model.effects.len();
             let twin = p.scores.equation == pair.scores.equation
                 && !pair.model.has(*term)
                 && p.model.effects[n - 1].kind == pair.model.effects[n - 1].kind;
             if twin {
                 let named = pair.model.effects[n - 2].kind;
-                self.found.ties.push(Tie {
-                    named,
-                    alternative: p.model.effects[n - 2],
-                });
+                self.found.ties.push(Tie::of(named, p.model.effects[n - 2]));
                 self.excluded.push(*term);
             }
         }
@@ -252,17 +267,63 @@ impl Search<'_> {
     }
 }
 
-/// `a` (tuned on `parent`) and `kind` tuned on the model with it, re-tuned jointly: the pair's
-/// model, when rule 9 names it.
+/// A pair tried: its model, and what rules 9 and 10 judge it by.
+struct PairTrial {
+    /// The model with the pair (its two effects last), re-tuned jointly.
+    scored: Scored,
+    /// Both members admissible, the second not spoiling the fit.
+    admissible: bool,
+    /// The pair's model without its first member, and without its second.
+    without_first: FoldErrors,
+    without_second: FoldErrors,
+}
+
+impl PairTrial {
+    /// Rule 9: the pair named beside the model scored `current`.
+    fn named_beside(&self, current: &FoldErrors) -> bool {
+        select::pair(
+            current,
+            &self.scored.errors(),
+            &self.without_first,
+            &self.without_second,
+            self.admissible,
+        )
+    }
+
+    /// Rule 10: the pair named in place of a term of the model scored `current`, against the
+    /// best model of its size that keeps the term.
+    fn named_instead(&self, current: &FoldErrors, same_size: Option<&FoldErrors>) -> bool {
+        select::exchange_for_pair(
+            current,
+            &self.scored.errors(),
+            &self.without_first,
+            &self.without_second,
+            self.admissible,
+            same_size,
+        )
+    }
+
+    /// Rule 10's tie: the pair in place of a term, not told from the model scored `current`.
+    fn tied_with(&self, current: &FoldErrors) -> bool {
+        select::pair_tie(
+            current,
+            &self.scored.errors(),
+            &self.without_first,
+            &self.without_second,
+            self.admissible,
+        )
+    }
+}
+
+/// `a` (tuned on `parent`) and `kind` tuned on the model with it, re-tuned jointly, and scored
+/// with and without each.
 fn try_pair(
     a: Effect,
     kind: EffectKind,
     parent: &Scored,
-    against: &FoldErrors,
-    same_size: Option<Option<&FoldErrors>>,
     s: &Signals,
     plan: &SimPlan,
-) -> Option<Scored> {
+) -> Option<PairTrial> {
     COUNTS[1].fetch_add(1, Ordering::Relaxed);
     let with_a = parent.model.with(a)?;
     let cv = cross_validate(&with_a, s)?;
@@ -281,18 +342,12 @@ fn try_pair(
     let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())
         && spoiled(&both, n - 1, &fit).is_none();
     let scored = Scored::of(both, s, plan)?;
-    let without_first = Scored::of(scored.model.without(n - 2), s, plan)?;
-    let without_second = Scored::of(scored.model.without(n - 1), s, plan)?;
-    let (both, first, second) = (
-        scored.errors(),
-        without_first.errors(),
-        without_second.errors(),
-    );
-    match same_size {
-        // Rule 10: the pair in place of a term.
-        Some(kept) => select::exchange_for_pair(against, &both, &first, &second, admissible, kept),
-        // Rule 9: the pair beside the model.
-        None => select::pair(against, &both, &first, &second, admissible),
-    }
-    .then_some(scored)
+    let without_first = Scored::of(scored.model.without(n - 2), s, plan)?.errors();
+    let without_second = Scored::of(scored.model.without(n - 1), s, plan)?.errors();
+    Some(PairTrial {
+        scored,
+        admissible,
+        without_first,
+        without_second,
+    })
 }
