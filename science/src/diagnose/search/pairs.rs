@@ -127,9 +127,7 @@ impl Search<'_> {
             })
             .map(|t| &t.evidence.errors);
         let gain = |p: &PairTrial| Gain::of(&against, &p.scored.errors()).mean;
-        // Every exchange tried: the term's index, the model without it, and its pairs (each with
-        // the rival in it).
-        let mut exchanges: Vec<(usize, Scored, Vec<(EffectKind, PairTrial)>)> = Vec::new();
+        let mut exchanges: Vec<TermExchange> = Vec::new();
         for i in 0..parent.model.effects.len() {
             let old = parent.model.effects[i];
             if old.candidate().slot() != Slot::Term {
@@ -167,15 +165,17 @@ impl Search<'_> {
                 .zip(outcomes)
                 .filter_map(|(&(term, _), p)| p.map(|p| (term, p)))
                 .collect();
-            exchanges.push((i, rest, tried));
+            exchanges.push(TermExchange { at: i, rest, tried });
         }
         // The best exchange rule 10 names; else the best pair tied with the model.
         let best_where = |ok: &dyn Fn(&PairTrial) -> bool| {
             let mut best: Option<(usize, usize)> = None;
-            for (e, (_, _, tried)) in exchanges.iter().enumerate() {
-                for (k, (_, p)) in tried.iter().enumerate() {
+            for (e, x) in exchanges.iter().enumerate() {
+                for (k, (_, p)) in x.tried.iter().enumerate() {
                     // The first best, as the terms and their pairs were tried.
-                    if ok(p) && best.is_none_or(|(be, bk)| gain(p) > gain(&exchanges[be].2[bk].1)) {
+                    if ok(p)
+                        && best.is_none_or(|(be, bk)| gain(p) > gain(&exchanges[be].tried[bk].1))
+                    {
                         best = Some((e, k));
                     }
                 }
@@ -184,7 +184,7 @@ impl Search<'_> {
         };
         let Some((e, top)) = best_where(&|p| p.named_instead(&against, same_size)) else {
             if let Some((e, top)) = best_where(&|p| p.tied_with(&against)) {
-                let (i, rest, tried) = &exchanges[e];
+                let TermExchange { at: i, rest, tried } = &exchanges[e];
                 let pair = &tried[top].1.scored;
                 let n = pair.model.effects.len();
                 self.found.ties.push(Tie {
@@ -199,7 +199,7 @@ impl Search<'_> {
             }
             return false;
         };
-        let (i, rest, tried) = exchanges.swap_remove(e);
+        let TermExchange { at: i, rest, tried } = exchanges.swap_remove(e);
         let pair = tried[top].1.scored.clone();
 
         // A member's twins (the same column under another name: the pair with it instead
@@ -265,6 +265,17 @@ impl Search<'_> {
             self.rivals.push((effect, Vec::new()));
         }
     }
+}
+
+/// Rule 10's trials for one term of the model: the term exchanged for each lag beside each of
+/// its rivals.
+struct TermExchange {
+    /// The term's index in the model.
+    at: usize,
+    /// The model without it.
+    rest: Scored,
+    /// Each pair tried in its place, with the rival in it.
+    tried: Vec<(EffectKind, PairTrial)>,
 }
 
 /// A pair tried: its model, and what rules 9 and 10 judge it by.
