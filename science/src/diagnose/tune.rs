@@ -60,11 +60,12 @@ impl Tuner<'_> {
         Some((Effect::new(self.kind, 0.0), None))
     }
 
-    /// The best of `effects` by held-out error.
+    /// The best of `effects` by held-out error (tried on all cores: a refining candidate's grid
+    /// runs after the candidate it refines, often while nothing else does).
     pub fn best(&self, effects: impl IntoIterator<Item = Effect>) -> Option<Tuned> {
-        effects
+        let effects: Vec<Effect> = effects.into_iter().collect();
+        super::search::in_parallel(&effects, |&e| (e, self.cv(e)))
             .into_iter()
-            .map(|e| (e, self.cv(e)))
             .min_by(|a, b| objective_of(&a.1).total_cmp(&objective_of(&b.1)))
     }
 

@@ -403,52 +403,67 @@ impl Search<'_> {
 
     /// `kinds` tried on `parent`, in parallel; those that could not be tried recorded in the
     /// first round. An effect that refines another is tried after it, and only where it passes
-    /// rules 1–4.
+    /// rules 1–4: in the same job, so that the chain starts first and runs beside the other
+    /// candidates rather than alone after them.
     fn trials(&mut self, kinds: &[EffectKind], parent: &Scored) -> Vec<Trial> {
         let (s, plan, progress, round) = (self.s, self.plan, self.progress, self.round);
         let done = AtomicUsize::new(0);
         let of = kinds.len();
         progress(Stage::Candidates { round, done: 0, of });
+        let tick = |n: usize| {
+            let d = done.fetch_add(n, Ordering::Relaxed) + n;
+            progress(Stage::Candidates { round, done: d, of });
+        };
         let (first, refining): (Vec<EffectKind>, Vec<EffectKind>) =
             kinds.iter().partition(|k| k.refines().is_none());
-        let run = |jobs: &[(EffectKind, Option<Effect>)]| {
-            in_parallel(jobs, |&(k, seed)| {
-                let r = try_effect(k, parent, seed, s, plan);
-                let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-                progress(Stage::Candidates { round, done: d, of });
-                (k, r)
-            })
-        };
-        let jobs: Vec<(EffectKind, Option<Effect>)> = first.iter().map(|&k| (k, None)).collect();
-        let mut outcomes = run(&jobs);
-        let passed = |k: EffectKind, outcomes: &[(EffectKind, Result<Trial, Rejection>)]| {
-            outcomes.iter().find_map(|(kind, r)| match r {
-                Ok(t)
-                    if *kind == k
-                        && matches!(
-                            select::judge(&parent.errors(), &t.evidence),
-                            None | Some(Decision::NearMiss)
-                        ) =>
-                {
-                    Some(t.effect)
-                }
-                _ => None,
-            })
-        };
-        let jobs: Vec<(EffectKind, Option<Effect>)> = refining
+        // Each first-tried kind with the kinds that refine it; chains first.
+        let mut jobs: Vec<(EffectKind, Vec<EffectKind>)> = first
             .iter()
-            .filter_map(|&k| {
-                k.refines()
-                    .and_then(|r| passed(r, &outcomes))
-                    .map(|e| (k, Some(e)))
+            .map(|&k| {
+                let refiners = refining
+                    .iter()
+                    .copied()
+                    .filter(|r| r.refines() == Some(k))
+                    .collect();
+                (k, refiners)
             })
             .collect();
-        outcomes.extend(run(&jobs));
-        // Refiners not tried count as done.
-        for _ in jobs.len()..refining.len() {
-            let d = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress(Stage::Candidates { round, done: d, of });
+        jobs.sort_by_key(|(_, refiners)| std::cmp::Reverse(refiners.len()));
+        let chained: Vec<Vec<(EffectKind, Result<Trial, Rejection>)>> =
+            in_parallel(&jobs, |(k, refiners)| {
+                let r = try_effect(*k, parent, None, s, plan);
+                tick(1);
+                let passed = match &r {
+                    Ok(t) => matches!(
+                        select::judge(&parent.errors(), &t.evidence),
+                        None | Some(Decision::NearMiss)
+                    )
+                    .then_some(t.effect),
+                    Err(_) => None,
+                };
+                let mut out = vec![(*k, r)];
+                for &refiner in refiners {
+                    if let Some(seed) = passed {
+                        out.push((refiner, try_effect(refiner, parent, Some(seed), s, plan)));
+                    }
+                    // Refiners not tried count as done.
+                    tick(1);
+                }
+                out
+            });
+        // Kinds that refine one not asked for are not tried; they count as done.
+        let orphans = refining
+            .iter()
+            .filter(|r| !jobs.iter().any(|(_, rs)| rs.contains(r)))
+            .count();
+        if orphans > 0 {
+            tick(orphans);
         }
+        // In the order asked for, the refiners after the rest (the same report whatever the
+        // order of work).
+        let mut outcomes: Vec<(EffectKind, Result<Trial, Rejection>)> =
+            chained.into_iter().flatten().collect();
+        outcomes.sort_by_key(|(k, _)| (k.refines().is_some(), kinds.iter().position(|x| x == k)));
         let mut trials = Vec::new();
         for (k, outcome) in outcomes {
             match outcome {
