@@ -44,7 +44,8 @@
 //! 7. An effect stays in the model while removing it loses a significant gain of at least
 //!    [`KEEP_GAIN`] (the backward step; half the threshold to enter, so that an effect is not
 //!    dropped and added back by the noise of the re-tuning).
-//! 8. An effect of the model is **exchanged** for another ([`exchange`]) when the model with the
+//! 8. An effect of the model is **exchanged** for another ([`exchange`]: one of its rivals, or an
+//!    effect tied with it when it was named) when the model with the
 //!    other instead is separated from it in its favour (rule 5), or ties with it and has fewer
 //!    parameters; a tie with as many is an ambiguity between the two (two torque shapes over a
 //!    narrow band of speeds: a friction and a viscous term, or an exponent and an offset).

@@ -590,7 +590,8 @@ impl Search<'_> {
             .unwrap_or_default()
     }
 
-    /// Rule 8 for every effect but the newest: its rivals in its place.
+    /// Rule 8 for every effect but the newest: its rivals, and the effects tied with it, in its
+    /// place.
     fn exchange(&mut self) {
         let newest = self.current.model.effects.len().saturating_sub(1);
         for i in 0..newest {
@@ -598,8 +599,15 @@ impl Search<'_> {
             let old = parent.model.effects[i];
             let rest = Scored::of(parent.model.without(i), self.s, self.plan);
             let Some(rest) = rest else { continue };
-            let rivals: Vec<EffectKind> = self
-                .rivals_of(old.kind)
+            // Its rivals, and the effects tied with it (never tried again while it stays: its
+            // exchange is where that tie is settled, as the model around it grows).
+            let mut candidates = self.rivals_of(old.kind);
+            for t in &self.found.ties {
+                if t.named == old.kind && !candidates.contains(&t.alternative.kind) {
+                    candidates.push(t.alternative.kind);
+                }
+            }
+            let rivals: Vec<EffectKind> = candidates
                 .into_iter()
                 // Any rival not in the model, tied with another effect or not: an exchange is
                 // where a tie of the rounds before is settled.
