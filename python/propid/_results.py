@@ -215,8 +215,9 @@ class Diagnosis(_Record):
     )
     ambiguities: _Field[List[Dict[str, Any]]] = _Field(
         "ambiguities",
-        "Effects the data cannot tell from a named one: both estimates, the other model's J and c2, "
-        "the separating run.",
+        "Effects the data cannot tell from a named one (`alongside`: the lag the other model holds "
+        "beside it, where a term stands against a lag and another term): both estimates, the other "
+        "model's J and c2, the separating run.",
     )
     unidentified: _Field[List[Dict[str, Any]]] = _Field(
         "unidentified", "Parameters these data do not identify (J, c2), with their estimates."
