@@ -560,7 +560,7 @@ impl Search<'_> {
                     Some(Decision::Rejected {
                         reason: Rejection::EquationSilent
                     })
-                ) && Gain::of(&parent, &t.evidence.errors).mean >= select::MIN_GAIN
+                )
             })
             .map(|t| Unconfirmed {
                 effect: t.effect,
@@ -576,6 +576,8 @@ impl Search<'_> {
                     &t.scored.scores.simulation,
                 ),
             })
+            // It gains what naming asks.
+            .filter(|u| u.gain.mean >= select::MIN_GAIN)
             .collect();
         found.sort_by(|a, b| b.gain.mean.total_cmp(&a.gain.mean));
         self.found.unconfirmed = found;
