@@ -522,44 +522,51 @@ pub fn exchange(current: &FoldErrors, parameters: usize, trial: &Evidence) -> Ex
     }
 }
 
-/// Rule 9: whether two effects, both admissible, are named together: the model with both gains
-/// significantly and at least [`MIN_GAIN`] over the model scored `current`, and removing either
-/// loses what rule 7 asks (`without_first`, `without_second`: the pair's model without each).
-pub fn pair(
-    current: &FoldErrors,
-    both: &FoldErrors,
-    without_first: &FoldErrors,
-    without_second: &FoldErrors,
-    admissible: bool,
-) -> bool {
-    let g = Gain::of(current, both);
-    admissible
-        && g.significant()
-        && g.mean >= MIN_GAIN
-        && keep(without_first, both)
-        && keep(without_second, both)
+/// What rules 9 and 10 judge a pair of effects by.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PairEvidence {
+    /// The model with the pair (both effects last).
+    pub both: FoldErrors,
+    /// That model without its first member, and without its second.
+    pub without_first: FoldErrors,
+    pub without_second: FoldErrors,
+    /// Both members admissible (rule 1).
+    pub admissible: bool,
+}
+
+impl PairEvidence {
+    /// Both members admissible, and each keeps its place in the pair's model by rule 7.
+    fn members_hold(&self) -> bool {
+        self.admissible
+            && keep(&self.without_first, &self.both)
+            && keep(&self.without_second, &self.both)
+    }
+}
+
+/// Rule 9: whether two effects are named together: both hold their places
+/// ([`PairEvidence`]) and the model with both gains significantly and at least [`MIN_GAIN`]
+/// over the model scored `current`.
+pub fn pair(current: &FoldErrors, p: &PairEvidence) -> bool {
+    let g = Gain::of(current, &p.both);
+    p.members_hold() && g.significant() && g.mean >= MIN_GAIN
 }
 
 /// Rule 10: whether a term of the model is exchanged for a pair (a lag and one of the term's
-/// rivals) whose model without the term scores `both`: the pair is named by rule 9 against the
-/// model as it is (`current`; `without_first`, `without_second`: the pair's model without each),
-/// and separated ([`separates`]) from `same_size`, the best model of its size that keeps the
-/// term (the term beside one admissible effect of the round; `None` when there is none). An
-/// exchange of one effect for two must beat what adding one effect to the model already does.
+/// rivals) whose model without the term is `p`: the pair is named by rule 9 against the model
+/// as it is (`current`), and separated ([`separates`]) from `same_size`, the best model of its
+/// size that keeps the term (the term beside one admissible effect of the round; `None` when
+/// there is none). An exchange of one effect for two must beat what adding one effect to the
+/// model already does.
 pub fn exchange_for_pair(
     current: &FoldErrors,
-    both: &FoldErrors,
-    without_first: &FoldErrors,
-    without_second: &FoldErrors,
-    admissible: bool,
+    p: &PairEvidence,
     same_size: Option<&FoldErrors>,
 ) -> bool {
-    pair(current, both, without_first, without_second, admissible)
-        && same_size.is_none_or(|kept| separates(kept, both))
+    pair(current, p) && same_size.is_none_or(|kept| separates(kept, &p.both))
 }
 
 /// Rule 10's tie, asked of a pair rule 10 did not name: whether the model with a term exchanged
-/// for the pair (scored `both`) is a model the data cannot rule out beside the model as it is
+/// for the pair (`p`) is a model the data cannot rule out beside the model as it is
 /// (`current`). Both members are admissible and each keeps its place in the pair's model by rule
 /// 7; the pair's held-out gain over the model is positive (it does better on average: a model with
 /// more parameters that does not is, as in rule 6, no better than the simpler), and
@@ -567,18 +574,8 @@ pub fn exchange_for_pair(
 /// not consistent, or because a model of its size that keeps the term does as well: the models
 /// are not nested, and the report gives J and c2 under each (a constant torque, or a viscous
 /// friction and a lag, over the seed's sine).
-pub fn pair_tie(
-    current: &FoldErrors,
-    both: &FoldErrors,
-    without_first: &FoldErrors,
-    without_second: &FoldErrors,
-    admissible: bool,
-) -> bool {
-    admissible
-        && keep(without_first, both)
-        && keep(without_second, both)
-        && Gain::of(current, both).mean > 0.0
-        && !separates(both, current)
+pub fn pair_tie(current: &FoldErrors, p: &PairEvidence) -> bool {
+    p.members_hold() && Gain::of(current, &p.both).mean > 0.0 && !separates(&p.both, current)
 }
 
 #[cfg(test)]
@@ -605,6 +602,22 @@ mod tests {
 
     fn parent() -> FoldErrors {
         errors(flat(1.0), flat(1.0))
+    }
+
+    /// A pair's evidence: its model's errors, without each member, and whether both are
+    /// admissible.
+    fn pair_of(
+        both: &FoldErrors,
+        without_first: &FoldErrors,
+        without_second: &FoldErrors,
+        admissible: bool,
+    ) -> PairEvidence {
+        PairEvidence {
+            both: both.clone(),
+            without_first: without_first.clone(),
+            without_second: without_second.clone(),
+            admissible,
+        }
     }
 
     fn evidence(effect: EffectKind, eq: [f64; FOLDS], sim: [f64; FOLDS]) -> Evidence {
@@ -955,13 +968,13 @@ mod tests {
         let current = parent();
         let both = errors(about(0.5, 0.01), about(0.4, 0.01));
         let without = errors(about(0.98, 0.01), about(0.95, 0.01));
-        assert!(pair(&current, &both, &without, &without, true));
-        assert!(!pair(&current, &both, &without, &without, false));
+        assert!(pair(&current, &pair_of(&both, &without, &without, true)));
+        assert!(!pair(&current, &pair_of(&both, &without, &without, false)));
         // One member does nothing the other does not: not a pair.
-        assert!(!pair(&current, &both, &both, &without, true));
+        assert!(!pair(&current, &pair_of(&both, &both, &without, true)));
         // The pair gains too little.
         let small = errors(about(0.99, 0.001), flat(1.0));
-        assert!(!pair(&current, &small, &current, &current, true));
+        assert!(!pair(&current, &pair_of(&small, &current, &current, true)));
     }
 
     #[test]
@@ -970,21 +983,33 @@ mod tests {
         let without = errors(about(1.2, 0.01), about(1.3, 0.01));
         // Better on average, not consistently: the data cannot rule it out.
         let close = errors(about(0.99, 0.03), about(0.97, 0.05));
-        assert!(pair_tie(&current, &close, &without, &without, true));
-        assert!(!pair_tie(&current, &close, &without, &without, false));
+        assert!(pair_tie(
+            &current,
+            &pair_of(&close, &without, &without, true)
+        ));
+        assert!(!pair_tie(
+            &current,
+            &pair_of(&close, &without, &without, false)
+        ));
         // A member that does not keep its place in the pair: no alternative model.
-        assert!(!pair_tie(&current, &close, &close, &without, true));
+        assert!(!pair_tie(
+            &current,
+            &pair_of(&close, &close, &without, true)
+        ));
         // Worse on average, though not significantly: no better than the simpler model.
         let behind = errors(about(1.01, 0.03), about(1.02, 0.05));
         let kept = errors(about(1.03, 0.03), about(1.05, 0.05));
-        assert!(!pair_tie(&current, &behind, &kept, &kept, true));
+        assert!(!pair_tie(&current, &pair_of(&behind, &kept, &kept, true)));
         // Clearly better (not named: a model of its size that keeps the term does as well).
         let better = errors(about(0.5, 0.01), about(0.4, 0.01));
-        assert!(pair_tie(&current, &better, &without, &without, true));
+        assert!(pair_tie(
+            &current,
+            &pair_of(&better, &without, &without, true)
+        ));
         // The model as it is preferred: no tie.
         let worse = errors(about(1.5, 0.01), about(1.6, 0.01));
         let kept = errors(about(1.6, 0.01), about(1.7, 0.01));
-        assert!(!pair_tie(&current, &worse, &kept, &kept, true));
+        assert!(!pair_tie(&current, &pair_of(&worse, &kept, &kept, true)));
     }
 
     #[test]
@@ -994,36 +1019,29 @@ mod tests {
         let without = errors(about(0.98, 0.01), about(0.95, 0.01));
         // Nothing of its size to beat: rule 9 decides.
         assert!(exchange_for_pair(
-            &current, &both, &without, &without, true, None
+            &current,
+            &pair_of(&both, &without, &without, true),
+            None
         ));
         // The term beside another effect does as well: no exchange (a drag exponent and an
         // offset read as viscous friction and a 40 ms lag on the independent stand).
         let kept = errors(about(0.51, 0.01), about(0.4, 0.01));
         assert!(!exchange_for_pair(
             &current,
-            &both,
-            &without,
-            &without,
-            true,
+            &pair_of(&both, &without, &without, true),
             Some(&kept)
         ));
         // Clearly worse than the pair: the exchange is made.
         let worse = errors(about(0.9, 0.01), about(0.85, 0.01));
         assert!(exchange_for_pair(
             &current,
-            &both,
-            &without,
-            &without,
-            true,
+            &pair_of(&both, &without, &without, true),
             Some(&worse)
         ));
         // A pair rule 9 does not name is not exchanged, whatever it beats.
         assert!(!exchange_for_pair(
             &current,
-            &both,
-            &both,
-            &without,
-            true,
+            &pair_of(&both, &both, &without, true),
             Some(&worse)
         ));
     }

@@ -58,7 +58,7 @@ impl Search<'_> {
         let against = parent.errors();
         let outcomes = in_parallel(&pairs, |&(a, b)| {
             try_pair(a, b, &parent, s, plan)
-                .filter(|p| p.named_beside(&against))
+                .filter(|p| select::pair(&against, &p.evidence))
                 .map(|p| p.scored)
         });
         let Some(pair) = outcomes.into_iter().flatten().max_by(|x, y| {
@@ -126,7 +126,7 @@ impl Search<'_> {
                     .total_cmp(&Gain::of(&against, &b.evidence.errors).mean)
             })
             .map(|t| &t.evidence.errors);
-        let gain = |p: &PairTrial| Gain::of(&against, &p.scored.errors()).mean;
+        let gain = |p: &PairTrial| Gain::of(&against, &p.evidence.both).mean;
         let mut exchanges: Vec<TermExchange> = Vec::new();
         for i in 0..parent.model.effects.len() {
             let old = parent.model.effects[i];
@@ -182,8 +182,10 @@ impl Search<'_> {
             }
             best
         };
-        let Some((e, top)) = best_where(&|p| p.named_instead(&against, same_size)) else {
-            if let Some((e, top)) = best_where(&|p| p.tied_with(&against)) {
+        let Some((e, top)) =
+            best_where(&|p| select::exchange_for_pair(&against, &p.evidence, same_size))
+        else {
+            if let Some((e, top)) = best_where(&|p| select::pair_tie(&against, &p.evidence)) {
                 let TermExchange { at: i, rest, tried } = &exchanges[e];
                 let pair = &tried[top].1.scored;
                 let n = pair.model.effects.len();
@@ -206,7 +208,7 @@ impl Search<'_> {
         // scores alike) are ambiguous with it.
         for (term, p) in tried
             .iter()
-            .filter(|(_, p)| p.named_instead(&against, same_size))
+            .filter(|(_, p)| select::exchange_for_pair(&against, &p.evidence, same_size))
         {
             let p = &p.scored;
             let n = p.model.effects.len();
@@ -282,48 +284,8 @@ struct TermExchange {
 struct PairTrial {
     /// The model with the pair (its two effects last), re-tuned jointly.
     scored: Scored,
-    /// Both members admissible, the second not spoiling the fit.
-    admissible: bool,
-    /// The pair's model without its first member, and without its second.
-    without_first: FoldErrors,
-    without_second: FoldErrors,
-}
-
-impl PairTrial {
-    /// Rule 9: the pair named beside the model scored `current`.
-    fn named_beside(&self, current: &FoldErrors) -> bool {
-        select::pair(
-            current,
-            &self.scored.errors(),
-            &self.without_first,
-            &self.without_second,
-            self.admissible,
-        )
-    }
-
-    /// Rule 10: the pair named in place of a term of the model scored `current`, against the
-    /// best model of its size that keeps the term.
-    fn named_instead(&self, current: &FoldErrors, same_size: Option<&FoldErrors>) -> bool {
-        select::exchange_for_pair(
-            current,
-            &self.scored.errors(),
-            &self.without_first,
-            &self.without_second,
-            self.admissible,
-            same_size,
-        )
-    }
-
-    /// Rule 10's tie: the pair in place of a term, not told from the model scored `current`.
-    fn tied_with(&self, current: &FoldErrors) -> bool {
-        select::pair_tie(
-            current,
-            &self.scored.errors(),
-            &self.without_first,
-            &self.without_second,
-            self.admissible,
-        )
-    }
+    /// Its held-out errors, with and without each member, and whether both are admissible.
+    evidence: select::PairEvidence,
 }
 
 /// `a` (tuned on `parent`) and `kind` tuned on the model with it, re-tuned jointly, and scored
@@ -353,12 +315,11 @@ fn try_pair(
     let admissible = (n - 2..n).all(|k| judged(&both, k, &fit, s).1.is_ok())
         && spoiled(&both, n - 1, &fit).is_none();
     let scored = Scored::of(both, s, plan)?;
-    let without_first = Scored::of(scored.model.without(n - 2), s, plan)?.errors();
-    let without_second = Scored::of(scored.model.without(n - 1), s, plan)?.errors();
-    Some(PairTrial {
-        scored,
+    let evidence = select::PairEvidence {
+        both: scored.errors(),
+        without_first: Scored::of(scored.model.without(n - 2), s, plan)?.errors(),
+        without_second: Scored::of(scored.model.without(n - 1), s, plan)?.errors(),
         admissible,
-        without_first,
-        without_second,
-    })
+    };
+    Some(PairTrial { scored, evidence })
 }
