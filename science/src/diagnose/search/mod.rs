@@ -599,10 +599,10 @@ impl Search<'_> {
         for i in 0..newest {
             let parent = self.current.clone();
             let old = parent.model.effects[i];
-            let rest = Scored::of(parent.model.without(i), self.s, self.plan);
-            let Some(rest) = rest else { continue };
-            // Its rivals, and the effects tied with it (never tried again while it stays: its
-            // exchange is where that tie is settled, as the model around it grows).
+            let without = parent.model.without(i);
+            // Its rivals (tied with another effect or not), and the effects tied with it, which
+            // no later round tries: an exchange is where a tie of the rounds before is settled,
+            // as the model around it grows.
             let mut candidates = self.rivals_of(old.kind);
             for t in &self.found.ties {
                 if t.named == old.kind && !candidates.contains(&t.alternative.kind) {
@@ -611,17 +611,19 @@ impl Search<'_> {
             }
             let rivals: Vec<EffectKind> = candidates
                 .into_iter()
-                // Any rival not in the model, tied with another effect or not: an exchange is
-                // where a tie of the rounds before is settled.
                 .filter(|k| {
-                    !rest.model.has(*k)
+                    !without.has(*k)
                         && (k.candidate().slot() != super::candidate::Slot::Lag
-                            || !rest.model.has_lag())
+                            || !without.has_lag())
                 })
                 .collect();
             if rivals.is_empty() {
                 continue;
             }
+            // Scored only where there is something to try in its place.
+            let Some(rest) = Scored::of(without, self.s, self.plan) else {
+                continue;
+            };
             COUNTS[2].fetch_add(rivals.len(), Ordering::Relaxed);
             let trials = self.trials(&rivals, &rest);
             let parameters = old.candidate().parameters();
