@@ -331,6 +331,25 @@ pub fn torque_noise_words(name: &str, bias: f64) -> String {
     )
 }
 
+/// The words for the same bias where the fit has taken it out (`propid diagnose`: the force's
+/// noise σ² subtracted from its own sums, see `diagnose::engine`): the value given is corrected,
+/// and the correction rests on that noise being white.
+pub fn torque_noise_corrected_words(name: &str, bias: f64) -> String {
+    format!(
+        "the torque's noise is large beside its swing: least squares would read {name} about {:.0} % high \
+         (errors in the regressor); the {name} given is corrected for it, which holds where that noise is \
+         white (measured from sample-to-sample differences); a wider lo..hi would make the correction small",
+        100.0 * bias.min(99.99)
+    )
+}
+
+/// [`torque_noise_corrected_words`] as a warning, for a bias between [`BIAS_WORTH_SAYING`] and
+/// [`MAX_RELATIVE_STDERR`] (above it the parameter is not taken as identified).
+pub fn torque_noise_corrected_warning(name: &str, bias: f64) -> Option<String> {
+    (bias > BIAS_WORTH_SAYING && bias <= MAX_RELATIVE_STDERR)
+        .then(|| torque_noise_corrected_words(name, bias))
+}
+
 /// The warning for a bias of `name` between [`BIAS_WORTH_SAYING`] and [`MAX_RELATIVE_STDERR`]
 /// (above it the parameter is not identified: [`NotIdentified::NoisyTorque`]).
 pub fn torque_noise_warning(name: &str, bias: f64) -> Option<String> {

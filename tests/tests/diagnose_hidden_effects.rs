@@ -445,11 +445,33 @@ fn check_pair(pair: &Pair, seed: u64) -> Vec<String> {
     diagnose_pair(pair, seed).0
 }
 
+/// PROPID_DUMP=dir: writes each pair's draw as a TSV there, to read it with `propid diagnose`.
+fn dump(pair: &Pair, seed: u64, samples: &[propid_io::tsv::Sample]) {
+    use std::io::Write;
+    let Ok(dir) = std::env::var("PROPID_DUMP") else {
+        return;
+    };
+    let name = pair.name.replace([' ', '+', ','], "_");
+    let path = format!("{dir}/{name}-{:?}-{seed}.tsv", pair.excitation.pattern);
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("PROPID_DUMP writable"));
+    writeln!(f, "t\tforce\tvelocity\tacceleration").unwrap();
+    for x in samples {
+        writeln!(
+            f,
+            "{}\t{}\t{}\t{}",
+            x.t, x.force, x.velocity, x.acceleration
+        )
+        .unwrap();
+    }
+}
+
 /// What is wrong with the diagnosis of `pair` (empty: right), and whether it is silently
 /// wrong (says the model explains the data while J or the drag is more than 2 % off).
 fn diagnose_pair(pair: &Pair, seed: u64) -> (Vec<String>, bool) {
     let c = &pair.config;
-    let r = diagnose(&simulate(*c, &pair.excitation, seed), Options::default()).unwrap();
+    let samples = simulate(*c, &pair.excitation, seed);
+    dump(pair, seed, &samples);
+    let r = diagnose(&samples, Options::default()).unwrap();
     let mid = 0.5 * (pair.excitation.lo.max(0.1) + pair.excitation.hi);
     let bad = judge(
         &r,

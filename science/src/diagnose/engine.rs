@@ -20,11 +20,17 @@ use super::FOLDS;
 /// A fit on some samples.
 #[derive(Clone, Debug)]
 pub(crate) struct Fit {
-    /// Coefficients (θ₀ = 1/J, θ₁ = c2/J, then the effects').
+    /// Coefficients (θ₀ = 1/J, θ₁ = c2/J, then the effects'), without the bias the force's noise
+    /// puts on its own (see [`without_force_noise`]): the parameters reported.
     pub theta: Vec<f64>,
     /// Their standard errors.
     pub stderr: Vec<f64>,
-    /// Residual sum of squares (with the force noise a transformation took out put back).
+    /// The coefficients as the measured regressors fit them (the force's noise in its regressor
+    /// left in): the predictor of the acceleration from the signals as measured, whose residual
+    /// the structure analyses read and whose sum of squares is [`Fit::rss`].
+    pub predictor: Vec<f64>,
+    /// Residual sum of squares of [`Fit::predictor`] (with the force noise a transformation
+    /// took out put back).
     pub rss: f64,
     /// Samples.
     pub n: f64,
@@ -205,13 +211,17 @@ fn fit_n<const N: usize>(
 ) -> Option<Fit> {
     let read = Read { stride: 1, skip };
     let eq = accumulate::<N>(model, p, s, range, 1, model.differentiated(), read).pop()?;
-    let (theta, stderr) = eq.solve()?;
+    let (predictor, stderr) = eq.solve()?;
+    // The parameters without the force noise's bias, with the standard errors of the sums as
+    // measured (that noise is in the residual the errors are scaled by).
+    let (theta, _) = corrected(&eq, p, s).solve()?;
     let n = eq.least_squares().count();
     Some(Fit {
         theta: theta.to_vec(),
         stderr: stderr.to_vec(),
-        rss: eq.least_squares().residual_sum_of_squares(&theta)
-            + unfiltered_noise(&theta, p, s) * n,
+        predictor: predictor.to_vec(),
+        rss: eq.least_squares().residual_sum_of_squares(&predictor)
+            + unfiltered_noise(&predictor, p, s) * n,
         n,
     })
 }
@@ -231,8 +241,13 @@ fn without_force_noise<const N: usize>(
     p: &Prepared,
     s: &Signals,
 ) -> Option<[f64; N]> {
-    let c = train.least_squares().count() * s.force_noise * s.force_noise * p.force_noise_gain;
-    let mut corrected = *train;
+    corrected(train, p, s).solve().map(|(theta, _)| theta)
+}
+
+/// `sums` with the force's noise taken out of the force's diagonal (see [`without_force_noise`]).
+fn corrected<const N: usize>(sums: &Stats<N>, p: &Prepared, s: &Signals) -> Stats<N> {
+    let c = sums.least_squares().count() * s.force_noise * s.force_noise * p.force_noise_gain;
+    let mut corrected = *sums;
     if c > 0.0 && c.is_finite() {
         let mut phi = [0.0; N];
         phi[0] = c.sqrt();
@@ -241,7 +256,7 @@ fn without_force_noise<const N: usize>(
             Stats::Iv(iv) => iv.update(&phi, &phi.map(|x| -x), 0.0),
         }
     }
-    corrected.solve().map(|(theta, _)| theta)
+    corrected
 }
 
 fn cross_fit_n<const N: usize>(
@@ -356,11 +371,13 @@ pub(crate) fn cross_fit(model: &Model, p: &Prepared, s: &Signals) -> Option<Cros
     by_width!(model, cross_fit_n, model, p, s, true, 1)
 }
 
-/// The acceleration residual of `model` fitted as `fit`, at every sample.
+/// The acceleration residual of `model` fitted as `fit` (its predictor), at every sample.
 pub(crate) fn residuals(model: &Model, fit: &Fit, s: &Signals) -> Vec<f64> {
     let p = model.prepare(s);
     measured_rows(model, &p, s, 0..s.len())
-        .map(|(i, r)| s.acceleration[i] - fit.theta.iter().zip(r).map(|(a, b)| a * b).sum::<f64>())
+        .map(|(i, r)| {
+            s.acceleration[i] - fit.predictor.iter().zip(r).map(|(a, b)| a * b).sum::<f64>()
+        })
         .collect()
 }
 

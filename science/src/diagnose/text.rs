@@ -108,7 +108,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
                 "   These data do not identify {0} ({0} = {1:.4e}): {2}.\n",
                 u.parameter.symbol(),
                 u.value,
-                crate::plausibility::torque_noise_words(u.parameter.symbol(), bias)
+                crate::plausibility::torque_noise_corrected_words(u.parameter.symbol(), bias)
             ),
             None => format!(
                 "   These data do not identify {}: {} = {:.4e} ± {:.1e} (more than {:.0} % of it, or no finite error); {}.\n",

@@ -351,6 +351,15 @@ pub fn verbose(r: &Report) {
             c.decision
         ));
     }
+    if let Some(u) = &r.simulation_only {
+        say(format!("      simulation only: {u:?}"));
+    }
+    if let Some(u) = &r.unexplained {
+        say(format!("      unexplained: {u:?}"));
+    }
+    if let Some(c) = &r.concentration {
+        say(format!("      concentration: {c:?}"));
+    }
     for n in &r.notes {
         say(format!("      note: {n}"));
     }

@@ -130,7 +130,8 @@ impl Candidate for ForceSensorLag {
     /// with it, so both are scored by the equation's error: one form tuned by the equation and
     /// the other by the simulation too would be compared under two objectives. (Tuned by both,
     /// the ESC32 F40 log's delay read 14.8 ms against the first-order form's 37.9 ms and J
-    /// 1.63·10⁻⁵ instead of 2.39·10⁻⁵, which 41 frozen samples then moved by 21 %.)
+    /// 1.63·10⁻⁵ instead of 2.39·10⁻⁵, which 41 frozen samples then moved by 21 %; figures of
+    /// before the reported parameters were taken without the force's noise.)
     fn tuned_by_simulation(&self) -> bool {
         false
     }
