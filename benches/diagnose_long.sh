@@ -37,9 +37,13 @@ printf 'program\twall s\tCPU s\tpeak RSS MiB\treport lines\n'
 # Each measured into a variable first: a failure inside $(…) given to printf would not stop
 # the script.
 now=$(measure "$P")
+cp "$dir/out" "$dir/out_now"
 printf 'propid diagnose\t%s\n' "$now"
 if [ -n "${BEFORE:-}" ]; then
   before=$(measure "$BEFORE")
   printf 'before\t%s\n' "$before"
 fi
-grep -q "torque_lag .*← named" "$dir/out" || { echo "the hidden torque lag was not named" >&2; exit 1; }
+grep -q "torque_lag .*← named" "$dir/out_now" || { echo "the hidden torque lag was not named" >&2; exit 1; }
+# This build's reading of the hidden 8 ms lag, and J and c2 (truth 2e-5 and 1.5e-8), as its Result
+# prints them.
+grep -m 3 -E '^   (J|c2|torque_lag) +=' "$dir/out_now"
