@@ -445,24 +445,21 @@ fn check_pair(pair: &Pair, seed: u64) -> Vec<String> {
     diagnose_pair(pair, seed).0
 }
 
-/// PROPID_DUMP=dir: writes each pair's draw as a TSV there, to read it with `propid diagnose`.
+/// PROPID_DUMP=dir: writes each pair's draw as a TSV there (propid-io's canonical writer), to
+/// read it with `propid diagnose`.
 fn dump(pair: &Pair, seed: u64, samples: &[propid_io::tsv::Sample]) {
-    use std::io::Write;
+    use propid_io::tsv::{Row, TsvWriter};
     let Ok(dir) = std::env::var("PROPID_DUMP") else {
         return;
     };
     let name = pair.name.replace([' ', '+', ','], "_");
     let path = format!("{dir}/{name}-{:?}-{seed}.tsv", pair.excitation.pattern);
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path).expect("PROPID_DUMP writable"));
-    writeln!(f, "t\tforce\tvelocity\tacceleration").unwrap();
+    let file = std::fs::File::create(path).expect("PROPID_DUMP writable");
+    let mut w = TsvWriter::new(std::io::BufWriter::new(file), false).unwrap();
     for x in samples {
-        writeln!(
-            f,
-            "{}\t{}\t{}\t{}",
-            x.t, x.force, x.velocity, x.acceleration
-        )
-        .unwrap();
+        w.write(&Row::new(f64::NAN, *x)).unwrap();
     }
+    w.into_inner().unwrap();
 }
 
 /// What is wrong with the diagnosis of `pair` (empty: right), and whether it is silently

@@ -7,9 +7,7 @@
 //! refuse, or say what is not identified; whatever Result they give must hold only finite numbers
 //! and no standard error of zero.
 
-use std::io::Write;
-
-use propid_io::tsv::Sample;
+use propid_io::tsv::{Row, Sample, TsvWriter};
 use propid_science::diagnose::{diagnose, Options, Verdict};
 use propid_science::excitation::{Excitation, Pattern};
 use propid_science::fit::{fit_path, FitOptions};
@@ -67,21 +65,15 @@ fn run(config: StandConfig, mistake: Mistake, seed: u64) -> Vec<Sample> {
     samples
 }
 
-/// The samples as the TSV `propid fit` reads (removed when dropped).
+/// The samples as the TSV `propid fit` reads, by propid-io's canonical writer (removed when
+/// dropped).
 fn tsv(samples: &[Sample]) -> tempfile::TempPath {
     let file = tempfile::Builder::new().suffix(".tsv").tempfile().unwrap();
-    let mut f = std::io::BufWriter::new(file.as_file());
-    writeln!(f, "t\tforce\tvelocity\tacceleration").unwrap();
+    let mut w = TsvWriter::new(std::io::BufWriter::new(file.as_file()), false).unwrap();
     for s in samples {
-        writeln!(
-            f,
-            "{}\t{}\t{}\t{}",
-            s.t, s.force, s.velocity, s.acceleration
-        )
-        .unwrap();
+        w.write(&Row::new(f64::NAN, *s)).unwrap();
     }
-    f.flush().unwrap();
-    drop(f);
+    w.into_inner().unwrap();
     file.into_temp_path()
 }
 
