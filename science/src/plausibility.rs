@@ -346,15 +346,19 @@ pub fn torque_noise_corrected_words(name: &str, bias: f64) -> String {
 /// [`torque_noise_corrected_words`] as a warning, for a bias between [`BIAS_WORTH_SAYING`] and
 /// [`MAX_RELATIVE_STDERR`] (above it the parameter is not taken as identified).
 pub fn torque_noise_corrected_warning(name: &str, bias: f64) -> Option<String> {
-    (bias > BIAS_WORTH_SAYING && bias <= MAX_RELATIVE_STDERR)
-        .then(|| torque_noise_corrected_words(name, bias))
+    worth_a_warning(bias).then(|| torque_noise_corrected_words(name, bias))
+}
+
+/// Whether a predicted bias is said as a warning: above [`BIAS_WORTH_SAYING`], and not above
+/// [`MAX_RELATIVE_STDERR`] (where the parameter is not taken as identified instead).
+fn worth_a_warning(bias: f64) -> bool {
+    bias > BIAS_WORTH_SAYING && bias <= MAX_RELATIVE_STDERR
 }
 
 /// The warning for a bias of `name` between [`BIAS_WORTH_SAYING`] and [`MAX_RELATIVE_STDERR`]
 /// (above it the parameter is not identified: [`NotIdentified::NoisyTorque`]).
 pub fn torque_noise_warning(name: &str, bias: f64) -> Option<String> {
-    (bias > BIAS_WORTH_SAYING && bias <= MAX_RELATIVE_STDERR)
-        .then(|| torque_noise_words(name, bias))
+    worth_a_warning(bias).then(|| torque_noise_words(name, bias))
 }
 
 /// The relative bias of J that the torque column's white noise predicts for a least-squares fit

@@ -257,7 +257,7 @@ impl Signals {
         instrument(&self.t, &self.force, self.slope_half_width + 1, i)
     }
 
-    /// The same for ȧ, two samples further out: an acceleration estimated by differencing a
+    /// The same for ȧ, two samples further out than Ḟ's: an acceleration estimated by differencing a
     /// velocity carries noise correlated over the difference's span (a forward difference's
     /// noise at one sample's distance, a central difference's — `propid import`'s from an rpm
     /// column — at two), so the samples just outside the window share noise with its edge, and
