@@ -358,3 +358,109 @@ fn the_independent_stand_is_diagnosed_right() {
     let _ = std::fs::remove_dir_all(&out);
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
+
+/// Noise-free draws the search does not bring to the truth, with the reason.
+const NOISE_FREE_LIMITS: &[(&str, &str)] = &[(
+    "sensor_filter_drag_exponent",
+    "an offset named first; the model without it, the exponent re-tuned beside the sensor's lag, \
+     misses the exponent's valley (a few thousandths wide without noise): the offset stays",
+)];
+
+/// The same cases drawn without noise (`--noise-scale 0`, seed 1): where the data separate every
+/// model, the search must reach the truth — each effect the stand hides named within 2 % (in the
+/// model, or in a model an ambiguity gives: a Coulomb friction and an offset on a rotor that never
+/// reverses are one column), and J
+/// within 0.2 % and the drag within 0.5 % of the truth, so that anything named beside them is
+/// negligible (a 2·10⁻⁹ viscous term beside a drag exponent is resolved on noise-free data and
+/// moves nothing). A wrong model here is the search's fault, not the noise's: this is how the
+/// backward step's re-tuning was found (a 10 ms lag beside viscous friction ended on a 6.3 ms
+/// lag, a viscous term 35 % low and an offset).
+#[test]
+#[ignore = "needs python3 with numpy and scipy (ci/steps/38-diagnose-independent.sh)"]
+fn noise_free_draws_reach_the_truth() {
+    let out = std::env::temp_dir().join(format!("propid-noise-free-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let status = Command::new("python3")
+        .arg(repo().join("tests/independent_stand/stand.py"))
+        .args(["--all", "--seed", "1", "--noise-scale", "0", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .status();
+    assert!(
+        status.is_ok_and(|s| s.success()),
+        "stand.py --all --noise-scale 0 failed (python3 with numpy and scipy?)"
+    );
+    let mut wrong = Vec::new();
+    let mut right = 0;
+    for &case in CASES {
+        let tsv = out.join(format!("{case}-seed1.tsv"));
+        let json = std::fs::read_to_string(out.join(format!("{case}-seed1.json"))).unwrap();
+        let truth: Value = serde_json::from_str(&json).unwrap();
+        let (samples, _) = read_samples(&tsv).expect("the stand's TSV reads");
+        let r = diagnose(&samples, Options::default()).expect("diagnosis runs");
+        let t = truth_of(&truth);
+        let (k, p) = match (r.extended.k, r.extended.p) {
+            (Some(k), Some(p)) => (k, p),
+            _ => (r.extended.c2, 2.0),
+        };
+        let drag = (r.extended.c1 * t.speed + k * t.speed.powf(p))
+            / (t.c1 * t.speed + t.k * t.speed.powf(t.p));
+        let inertia = r.extended.inertia / t.inertia;
+        // The values only: a verdict on a record whose residual is the stand's float32 rounding
+        // is not what this judges (the clean draw's rounding is larger at high speed, and is
+        // reported so).
+        let mut bad = Vec::new();
+        let hidden = truth["ideal_report"]["effects"].as_object().unwrap();
+        for (name, e) in hidden {
+            let value = e["value"].as_f64().unwrap();
+            let mut named = r.effects.iter().map(|x| (x.effect, x.value)).chain(
+                r.ambiguities
+                    .iter()
+                    .flat_map(|a| a.alternative_effects.iter().map(|x| (x.effect, x.value))),
+            );
+            if !named.any(|(k, v)| k == kind(name) && (v / value - 1.0).abs() <= 0.02) {
+                bad.push(format!("{name} not within 2 % of {value:.4e}"));
+            }
+        }
+        if (inertia - 1.0).abs() > 0.002 || (drag - 1.0).abs() > 0.005 {
+            bad.push(format!(
+                "J {:+.3} %, drag {:+.3} % (within 0.2 % and 0.5 %)",
+                100.0 * (inertia - 1.0),
+                100.0 * (drag - 1.0)
+            ));
+        }
+        let limit = NOISE_FREE_LIMITS.iter().find(|(c, _)| *c == case);
+        say(format!(
+            "{case:<30} {:<7} J {:+.3} % drag {:+.3} % {}{}",
+            match (bad.is_empty(), limit) {
+                (true, None) => "right",
+                (true, Some(_)) => "FIXED",
+                (false, Some(_)) => "limit",
+                (false, None) => "WRONG",
+            },
+            100.0 * (inertia - 1.0),
+            100.0 * (drag - 1.0),
+            describe(&r),
+            if bad.is_empty() {
+                String::new()
+            } else {
+                format!(" — {}", bad.join("; "))
+            }
+        ));
+        match (bad.is_empty(), limit) {
+            (true, None) => right += 1,
+            (true, Some(_)) => wrong.push(format!(
+                "{case}: right now without noise; take it off NOISE_FREE_LIMITS"
+            )),
+            (false, Some(_)) => {}
+            (false, None) => wrong.push(format!("{case}: {}", bad.join("; "))),
+        }
+    }
+    say(format!(
+        "noise-free: right {right} of {}; known limits {}",
+        CASES.len(),
+        NOISE_FREE_LIMITS.len()
+    ));
+    let _ = std::fs::remove_dir_all(&out);
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
