@@ -250,9 +250,20 @@ fn the_independent_stand_is_diagnosed_right() {
         "case", "seed", "outcome"
     ));
     let seeds: Vec<u64> = match std::env::var("PROPID_SEED") {
-        Ok(s) => vec![s.parse().expect("PROPID_SEED is a number")],
+        Ok(s) => s
+            .split(',')
+            .map(|x| {
+                x.parse()
+                    .expect("PROPID_SEED is a comma-separated list of numbers")
+            })
+            .collect(),
         Err(_) => SEEDS.to_vec(),
     };
+    // Another noise level (tests/independent_stand/noise_sweep.sh): every noise scaled by it;
+    // the ledger, written for the stand's own noise, is then not asserted, only the tally printed.
+    let noise_scale: Option<String> = std::env::var("PROPID_NOISE_SCALE").ok();
+    let scale_arg = noise_scale.clone().unwrap_or_else(|| "1".into());
+    let mut silent = 0;
     // The stand draws the next seed while this one is diagnosed (two cores: the step's time is
     // the larger of the two, not their sum).
     let (drawn, draws) = std::sync::mpsc::channel();
@@ -262,7 +273,8 @@ fn the_independent_stand_is_diagnosed_right() {
             for seed in seeds {
                 let status = Command::new("python3")
                     .arg(repo().join("tests/independent_stand/stand.py"))
-                    .args(["--all", "--seed", &seed.to_string(), "--out"])
+                    .args(["--all", "--noise-scale", &scale_arg])
+                    .args(["--seed", &seed.to_string(), "--out"])
                     .arg(&out)
                     .stdout(std::process::Stdio::null())
                     .status();
@@ -316,6 +328,16 @@ fn the_independent_stand_is_diagnosed_right() {
                     format!("\n{:>44}{}", "", bad.join("; "))
                 }
             ));
+            if silently_wrong(&r, truth_of(&truth)) {
+                silent += 1;
+                say(format!("{case} seed {seed}: SILENTLY WRONG"));
+            }
+            if noise_scale.is_some() {
+                if bad.is_empty() {
+                    right += 1;
+                }
+                continue;
+            }
             if bad.is_empty() && limit.is_none() {
                 right += 1;
                 if HELD_OUT_SEEDS.contains(&seed) {
@@ -333,6 +355,13 @@ fn the_independent_stand_is_diagnosed_right() {
     }
     generator.join().expect("the stand's thread ends");
     let total = CASES.len() * seeds.len();
+    if let Some(scale) = noise_scale {
+        say(format!(
+            "noise scale {scale}: right {right} of {total} on seeds {seeds:?}; silently wrong {silent}"
+        ));
+        let _ = std::fs::remove_dir_all(&out);
+        return;
+    }
     let held_out = seeds.iter().filter(|s| HELD_OUT_SEEDS.contains(s)).count();
     say(format!(
         "right {right} of {total}: {} of {} on the tuning seeds {TUNING_SEEDS:?}, {right_held_out} of {} on the held-out seeds {HELD_OUT_SEEDS:?}; known limits {}",
@@ -463,4 +492,54 @@ fn noise_free_draws_reach_the_truth() {
     ));
     let _ = std::fs::remove_dir_all(&out);
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// At a quarter of the stand's noise (held-out seeds 3 and 4), no run is silently wrong: more
+/// runs are right there (tests/independent_stand/noise_sweep.sh: 83 of 92 on seeds 3–6), and a
+/// quieter record must not turn a miss into a model said to explain the data while J or the drag
+/// is off. Before the verdict counted a consistent gain for an unresolved value as something the
+/// model lacks, the sensor filter beside a drag exponent on seed 3 was "explained" with J 3 % low.
+#[test]
+#[ignore = "needs python3 with numpy and scipy (ci/steps/38-diagnose-independent.sh)"]
+fn quieter_draws_are_never_silently_wrong() {
+    let out = std::env::temp_dir().join(format!("propid-quieter-{}", std::process::id()));
+    std::fs::create_dir_all(&out).unwrap();
+    let mut silent = Vec::new();
+    for seed in [3, 4] {
+        let status = Command::new("python3")
+            .arg(repo().join("tests/independent_stand/stand.py"))
+            .args([
+                "--all",
+                "--noise-scale",
+                "0.25",
+                "--seed",
+                &seed.to_string(),
+                "--out",
+            ])
+            .arg(&out)
+            .stdout(std::process::Stdio::null())
+            .status();
+        assert!(
+            status.is_ok_and(|s| s.success()),
+            "stand.py --all --noise-scale 0.25 failed (python3 with numpy and scipy?)"
+        );
+        for &case in CASES {
+            let tsv = out.join(format!("{case}-seed{seed}.tsv"));
+            let json =
+                std::fs::read_to_string(out.join(format!("{case}-seed{seed}.json"))).unwrap();
+            let truth: Value = serde_json::from_str(&json).unwrap();
+            let (samples, _) = read_samples(&tsv).expect("the stand's TSV reads");
+            let r = diagnose(&samples, Options::default()).expect("diagnosis runs");
+            if silently_wrong(&r, truth_of(&truth)) {
+                silent.push(format!("{case} seed {seed}: {}", describe(&r)));
+            }
+        }
+    }
+    say(format!(
+        "a quarter of the noise, seeds 3 and 4: {} of {} runs silently wrong",
+        silent.len(),
+        2 * CASES.len()
+    ));
+    let _ = std::fs::remove_dir_all(&out);
+    assert!(silent.is_empty(), "silently wrong:\n{}", silent.join("\n"));
 }

@@ -315,6 +315,8 @@ pub(crate) fn run(
 /// The best candidate of the search's last round that the simulated velocity alone would name
 /// (`Found::unconfirmed`) and with which J or c2 do not agree with `extended`'s (the agreement an
 /// ambiguity's J and c2 are given by): the model's J and c2 then depend on what it does not hold.
+/// Or one that both held-out errors would name but whose value is not resolved: whether or not
+/// J and c2 move with it, the model lacks something.
 fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<SimulationOnly> {
     found.unconfirmed.iter().find_map(|u| {
         let with = base_model_of(&fit_on_all(&u.model, s)?, &u.model, s);
@@ -324,7 +326,9 @@ fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<S
             extended.inertia,
             extended.inertia_stderr,
         ) || !agree(with.c2, with.c2_stderr, extended.c2, extended.c2_stderr);
-        moves.then(|| SimulationOnly {
+        // Where both errors gain with it, the model lacks something whether or not J and c2
+        // move with the term standing in for it.
+        (moves || u.unresolved).then(|| SimulationOnly {
             effect: u.effect.kind,
             value: u.estimate.value,
             unit: u.effect.kind.unit(),
@@ -332,6 +336,7 @@ fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<S
             equation_gain_percent: u.equation_percent,
             inertia_with: with.inertia,
             c2_with: with.c2,
+            value_stderr: u.unresolved.then_some(u.estimate.stderr),
         })
     })
 }

@@ -131,6 +131,11 @@ pub struct SimulationOnly {
     pub inertia_with: f64,
     /// c2 (or its quadratic equivalent) with it [N·m·s²/rad²].
     pub c2_with: f64,
+    /// Where the equation does gain with it, consistently over the folds as the simulation does,
+    /// but its value is not resolved from zero (3 standard errors): that standard error. The
+    /// model then lacks something these data show, which the effect stands in for at a value
+    /// they cannot fix.
+    pub value_stderr: Option<f64>,
 }
 
 /// A `propid drive` run that shows an effect, or tells two apart.

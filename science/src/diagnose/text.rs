@@ -361,6 +361,18 @@ pub fn simulation_only_sentence(o: &SimulationOnly, extended: &BaseModel) -> Str
     } else {
         format!(" {}", o.unit)
     };
+    if let Some(se) = o.value_stderr {
+        return format!(
+            "the model does not explain these data: both held-out errors drop consistently with {0} = {2:.4e} ± {6:.1e}{unit} (the simulated velocity's by {1:.1} %, the acceleration equation's by {3:+.2} %), a value they do not resolve from zero: it stands in for something the model lacks, and J and c2 are not established (with it J reads {4:+.1} % and c2 {5:+.1} %)",
+            o.effect,
+            o.simulation_gain_percent,
+            o.value,
+            o.equation_gain_percent,
+            100.0 * (o.inertia_with / extended.inertia - 1.0),
+            100.0 * (o.c2_with / extended.c2 - 1.0),
+            se
+        );
+    }
     format!(
         "the simulated velocity is not explained: its held-out error drops by {1:.1} % with {0} = {2:.4e}{unit} while the acceleration equation's moves by {3:+.2} %, too little to name it; J and c2 depend on what the model lacks (with it J reads {4:+.1} % and c2 {5:+.1} %)",
         o.effect,

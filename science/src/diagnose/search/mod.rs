@@ -140,6 +140,9 @@ pub(crate) struct Unconfirmed {
     pub gain: Gain,
     pub equation_percent: f64,
     pub simulation_percent: f64,
+    /// Whether it was rejected for a value not resolved from zero (not for an equation gain too
+    /// small).
+    pub unresolved: bool,
 }
 
 /// One effect tried on a model: its tuned form and its evidence.
@@ -562,15 +565,27 @@ impl Search<'_> {
         let parent = self.current.errors();
         let mut found: Vec<Unconfirmed> = trials
             .iter()
-            .filter(|t| {
-                matches!(
-                    select::judge(&parent, &t.evidence),
-                    Some(Decision::Rejected {
-                        reason: Rejection::EquationSilent
-                    })
-                )
+            .filter_map(|t| match select::judge(&parent, &t.evidence) {
+                Some(Decision::Rejected {
+                    reason: Rejection::EquationSilent,
+                }) => Some((t, false)),
+                // A consistent gain the equation shares, for a value the data do not resolve: a
+                // term that stands in for something the model lacks (on the independent stand at
+                // a quarter of its noise, a 1.4 ± 1.0 ms force-sensor lag beside an offset and an
+                // exponent the sensor's 10 ms filter had bent: J 3 % low, said to be explained).
+                Some(Decision::Rejected {
+                    reason:
+                        Rejection::Inadmissible {
+                            why: Inadmissible::NotResolved { .. },
+                        },
+                }) if Gain::of(&parent, &t.evidence.errors).significant()
+                    && Gain::parts(&parent, &t.evidence.errors).0.significant() =>
+                {
+                    Some((t, true))
+                }
+                _ => None,
             })
-            .map(|t| Unconfirmed {
+            .map(|(t, unresolved)| Unconfirmed {
                 effect: t.effect,
                 model: t.scored.model.clone(),
                 estimate: t.evidence.estimate,
@@ -583,6 +598,7 @@ impl Search<'_> {
                     &self.current.scores.simulation,
                     &t.scored.scores.simulation,
                 ),
+                unresolved,
             })
             // It gains what naming asks.
             .filter(|u| u.gain.mean >= select::MIN_GAIN)
