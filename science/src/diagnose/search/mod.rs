@@ -120,15 +120,17 @@ pub(crate) struct Found {
     pub ties: Vec<Tie>,
     /// Notes on the search.
     pub notes: Vec<String>,
-    /// Of the last round, the candidates the simulated velocity alone would name (see
-    /// [`Unconfirmed`]), best first.
+    /// Of the last round, the candidates the held-out errors would name but the rules do not
+    /// (see [`Unconfirmed`]), best first.
     pub unconfirmed: Vec<Unconfirmed>,
 }
 
-/// A candidate of the round that ended the search which passes rules 1–3 and gains what naming
-/// asks, but which rule 4 rejects: the simulated velocity improves and the acceleration equation,
-/// where the effect is a term, does not. It is not named; the model then does not explain the
-/// velocity, and where J or c2 move with it the report says so (`diagnosis`).
+/// A candidate of the round that ended the search which gains what naming asks, consistently,
+/// but is not named: rule 4 rejects it (the simulated velocity improves and the acceleration
+/// equation, where the effect is a term, does not), or rule 1 does for a value not resolved from
+/// zero while the equation's share of the gain is consistent too. The model then does not explain
+/// the data: where J or c2 move with the first kind, and always for the second, the report says
+/// so (`diagnosis`).
 #[derive(Clone)]
 pub(crate) struct Unconfirmed {
     /// The effect as tuned, and the model with it.
