@@ -143,6 +143,12 @@ pub struct Outcome {
     /// Whether the seed's model explains the data (absent when not tested: `propid fit`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed_model_holds: Option<bool>,
+    /// Whether the diagnosis finds something the model lacks on which these values depend (a
+    /// candidate both held-out errors, or the simulated velocity with J or c2 moving, would take
+    /// but the rules do not name: `simulation_only`): the values are then the model's best fit,
+    /// not established. Absent when false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub incomplete: bool,
     /// Parameters the data do not identify (their values are not measurements).
     pub not_identified: Vec<String>,
     /// Rows used.
@@ -171,6 +177,7 @@ impl Outcome {
             thrust: None,
             air: None,
             seed_model_holds: None,
+            incomplete: false,
             not_identified: fit.not_identified.iter().map(|s| s.to_string()).collect(),
             rows_used: fit.samples,
             rows_dropped: fit.rows.saturating_sub(fit.samples),
@@ -239,6 +246,7 @@ impl Outcome {
             thrust: None,
             air: None,
             seed_model_holds: Some(r.verdict == Verdict::NothingWrong),
+            incomplete: r.simulation_only.is_some(),
             not_identified: r
                 .unidentified
                 .iter()
@@ -433,6 +441,9 @@ impl Outcome {
             );
         }
         match self.seed_model_holds {
+            _ if self.incomplete => {
+                s += "   The model does not explain these data: these values are its best fit, not established (the diagnosis below says what it lacks).\n"
+            }
             Some(true) => s += "   The seed's model explains these data.\n",
             Some(false) if !self.effects.is_empty() => {
                 s += "   The seed's model is wrong on these data: use these extended values, not `propid fit`'s.\n"

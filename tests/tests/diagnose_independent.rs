@@ -20,6 +20,7 @@ use std::process::Command;
 
 use expect::{against_ledger, describe, judge, say, silently_wrong, Expected, Ties, Truth};
 use propid_science::diagnose::{diagnose, read_samples, EffectKind, Options, Report, Verdict};
+use propid_science::result::Outcome;
 use serde_json::Value;
 
 /// The stand's diagnosis cases (its thrust cases are propulsion's: propulsion_independent.rs).
@@ -532,6 +533,18 @@ fn quieter_draws_are_never_silently_wrong() {
             let r = diagnose(&samples, Options::default()).expect("diagnosis runs");
             if silently_wrong(&r, truth_of(&truth)) {
                 silent.push(format!("{case} seed {seed}: {}", describe(&r)));
+            }
+            // Where the diagnosis finds something the model lacks, the Result at the top says
+            // its values are not established.
+            if r.simulation_only.is_some() {
+                let text = Outcome::from_diagnosis(&r, 0, None)
+                    .map(|o| o.to_text())
+                    .unwrap_or_default();
+                if !text.contains("not established") {
+                    silent.push(format!(
+                        "{case} seed {seed}: the Result does not say its values are not established:\n{text}"
+                    ));
+                }
             }
         }
     }
