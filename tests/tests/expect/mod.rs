@@ -272,15 +272,23 @@ pub fn judge(r: &Report, expected: &[Expected], ties: Ties, truth: Option<Truth>
     bad
 }
 
+/// The extended model's J and its drag at the truth's speed, each relative to the truth's
+/// (0: exact).
+pub fn fit_errors(r: &Report, t: Truth) -> (f64, f64) {
+    let m = &readings(r)[0];
+    (
+        m.inertia / t.inertia - 1.0,
+        t.drag(m.c1, m.k, m.p) / t.drag(t.c1, t.k, t.p) - 1.0,
+    )
+}
+
 /// What is wrong with the extended model's J and drag law against the truth, each within 2 %.
 pub fn judge_fit(r: &Report, truth: Truth) -> Vec<String> {
     let m = &readings(r)[0];
     let t = truth;
-    let drag = t.drag(m.c1, m.k, m.p) / t.drag(t.c1, t.k, t.p);
-    if (m.inertia / t.inertia - 1.0).abs() > 0.02
-        || (drag - 1.0).abs() > 0.02
-        || !m.inertia.is_finite()
-    {
+    let (inertia, drag) = fit_errors(r, t);
+    let drag = drag + 1.0;
+    if inertia.abs() > 0.02 || (drag - 1.0).abs() > 0.02 || !m.inertia.is_finite() {
         vec![format!(
             "extended J {:.4e} (truth {:.4e}), drag {:.3e}·ω + {:.4e}·|ω|^{:.4} (truth {:.3e}·ω + {:.4e}·|ω|^{:.4}: {:+.1} % at {:.0} rad/s)",
             m.inertia, t.inertia, m.c1, m.k, m.p, t.c1, t.k, t.p, (drag - 1.0) * 100.0, t.speed
