@@ -402,12 +402,12 @@ fn the_independent_stand_is_diagnosed_right() {
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
 }
 
-/// Noise-free draws the search does not bring to the truth, with the reason.
-const NOISE_FREE_LIMITS: &[(&str, &str)] = &[(
-    "sensor_filter_drag_exponent",
-    "an offset named first; the model without it, the exponent re-tuned beside the sensor's lag, \
-     misses the exponent's valley (a few thousandths wide without noise): the offset stays",
-)];
+/// Noise-free draws the search does not bring to the truth, with the reason. None today. The
+/// sensor filter beside a drag exponent was, until a force sensor's lag re-tuned beside the rest
+/// of the model had its form decided again: named as a 3.3 ms delay beside an offset, it could
+/// only be re-tuned as a delay once the offset was taken out, that model lost, and the offset
+/// the truth does not have stayed.
+const NOISE_FREE_LIMITS: &[(&str, &str)] = &[];
 
 /// The same cases drawn without noise (`--noise-scale 0`, seed 1): where the data separate every
 /// model, the search must reach the truth — each effect the stand hides named within 2 % (in the
