@@ -109,7 +109,8 @@ def diagnose(data: Data, *, max_effects: int = 3, **options: Any) -> Diagnosis:
     Every option of ``propid diagnose`` is a keyword argument, ``-`` written ``_``, checked as the
     command checks it: ``diameter="7in"`` (C_Q, and C_T where there is thrust), ``density``,
     ``temperature`` with ``pressure``, ``flip_torque=True``, ``velocity_unit="rpm"``,
-    ``despike=True``. ``str(result)`` is the command's text report.
+    ``despike=True``, ``compare="force_sensor_lag,drag_exponent"`` (a model to score beside the
+    one named: ``result.compared``). ``str(result)`` is the command's text report.
 
     Raises :class:`propid.CannotJudge` when the data cannot support a verdict (the diagnosis,
     with its reasons, is the exception's ``diagnosis``), :class:`propid.InputError` for bad

@@ -243,6 +243,15 @@ class Diagnosis(_Record):
         "move with it (inertia_with, c2_with); the verdict is then unexplained.",
         "optional",
     )
+    compared: _Field[Optional[Dict[str, Any]]] = _Field(
+        "compared",
+        "The model asked about with ``compare=\"force_sensor_lag,drag_exponent\"``, fitted as the "
+        "search fits one and scored beside the model named: its effects and values, J and c2 under "
+        "it (model), its held-out gain over the model named (gain, and its equation and simulation "
+        "parts) and which the data prefer (preferred: `asked`, `named`, `neither` or `same`); "
+        "None where none was asked about.",
+        "optional",
+    )
     notes: _Field[List[str]] = _Field("notes", "Notes about the data.")
 
     def __init__(self, data: Dict[str, Any], text: str = "") -> None:

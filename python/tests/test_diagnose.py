@@ -101,3 +101,19 @@ def test_what_the_simulated_velocity_alone_shows_is_reported(tmp_path):
     assert only is not None and only == expected["simulation_only"], repr(d)
     assert only["simulation_gain_percent"] > 10 and abs(only["equation_gain_percent"]) < 0.5, only
     assert "the simulated velocity is not explained" in str(d)
+
+
+def test_a_model_asked_about_is_scored_beside_the_one_named(lag_run):
+    # compare= is the command's --compare: a Coulomb friction in the hidden lag's place is the
+    # model the held-out data reject, and the command's JSON says the same.
+    d = propid.diagnose(lag_run, compare="coulomb_friction")
+    c = d.compared
+    assert c["preferred"] == "named", c
+    assert [e["name"] for e in c["effects"]] == ["coulomb_friction"], c
+    assert c["gain"]["mean"] < 0, c
+    expected = json.loads(
+        cli(["diagnose", str(lag_run), "--format", "json", "--compare", "coulomb_friction"]).stdout
+    )
+    assert d.to_dict() == expected
+    assert "5. The model asked about (--compare coulomb_friction)" in str(d)
+    assert propid.diagnose(lag_run).compared is None

@@ -21,7 +21,10 @@ use std::process::Command;
 use expect::{
     against_ledger, describe, fit_errors, judge, say, silently_wrong, Expected, Ties, Truth,
 };
-use propid_science::diagnose::{diagnose, read_samples, EffectKind, Options, Report, Verdict};
+use propid_science::diagnose::{
+    diagnose, read_samples, EffectKind, EffectSet, Options, Preference, Report, Verdict,
+    NEAR_MISS_GAIN,
+};
 use propid_science::result::Outcome;
 use serde_json::Value;
 
@@ -71,35 +74,142 @@ const HELD_OUT_SEEDS: [u64; 4] = [3, 4, 5, 6];
 /// Cases (case, seed) the diagnosis does not get right today, and why. Each must still end
 /// honestly: no verdict that the model explains the data while its J or drag is more than 2 %
 /// off.
-const KNOWN_LIMITS: &[(&str, u64, &str)] = &[
-    ("lag_viscous", 2, LAG_UNDER_A_TERM),
-    ("drag_exponent_offset", 1, SPEED_SHAPES),
-    ("drag_exponent_offset", 2, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 1, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 2, SPEED_SHAPES),
-    ("force_sensor_lag", 1, SENSOR_LAG),
-    ("force_sensor_2nd_order", 2, SENSOR_LAG),
+const KNOWN_LIMITS: &[(&str, u64, &str, Against)] = &[
+    ("lag_viscous", 2, LAG_UNDER_A_TERM, Against::Same),
+    (
+        "drag_exponent_offset",
+        1,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    ("drag_exponent_offset", 2, SPEED_SHAPES, Against::CannotTell),
+    (
+        "sensor_filter_drag_exponent",
+        1,
+        SPEED_SHAPES,
+        Against::CannotTell,
+    ),
+    (
+        "sensor_filter_drag_exponent",
+        2,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    ("force_sensor_lag", 1, SENSOR_LAG, Against::Same),
+    ("force_sensor_2nd_order", 2, SENSOR_LAG, Against::Same),
     // The held-out seeds: the same families, and the second-order stage on both.
-    ("lag_viscous", 3, LAG_UNDER_A_TERM),
-    ("lag_viscous", 4, LAG_UNDER_A_TERM),
-    ("drag_exponent_offset", 3, SPEED_SHAPES),
-    ("drag_exponent_offset", 4, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 3, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 4, SPEED_SHAPES),
-    ("force_sensor_2nd_order", 4, SENSOR_LAG),
-    ("lag_viscous", 5, LAG_UNDER_A_TERM),
-    ("lag_viscous", 6, LAG_UNDER_A_TERM),
-    ("drag_exponent_offset", 5, SPEED_SHAPES),
-    ("drag_exponent_offset", 6, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 5, SPEED_SHAPES),
-    ("sensor_filter_drag_exponent", 6, SPEED_SHAPES),
-    ("force_sensor_lag", 5, SENSOR_LAG),
-    ("force_sensor_lag", 6, SENSOR_LAG),
-    ("force_sensor_2nd_order", 5, SENSOR_LAG),
-    ("force_sensor_2nd_order", 6, SENSOR_LAG),
-    ("lag_offset", 5, LAG_PRECISION),
-    ("lag_offset", 6, LAG_PRECISION),
+    ("lag_viscous", 3, LAG_UNDER_A_TERM, Against::CannotTell),
+    (
+        "lag_viscous",
+        4,
+        LAG_UNDER_A_TERM,
+        Against::TruthPreferredBySimulation,
+    ),
+    (
+        "drag_exponent_offset",
+        3,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    (
+        "drag_exponent_offset",
+        4,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    (
+        "sensor_filter_drag_exponent",
+        3,
+        SPEED_SHAPES,
+        Against::NamedPreferred,
+    ),
+    (
+        "sensor_filter_drag_exponent",
+        4,
+        SPEED_SHAPES,
+        Against::CannotTell,
+    ),
+    (
+        "force_sensor_2nd_order",
+        4,
+        SENSOR_LAG,
+        Against::NamedPreferred,
+    ),
+    ("lag_viscous", 5, LAG_UNDER_A_TERM, Against::CannotTell),
+    ("lag_viscous", 6, LAG_UNDER_A_TERM, Against::CannotTell),
+    (
+        "drag_exponent_offset",
+        5,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    (
+        "drag_exponent_offset",
+        6,
+        SPEED_SHAPES,
+        Against::TruthPreferredBySimulation,
+    ),
+    (
+        "sensor_filter_drag_exponent",
+        5,
+        SPEED_SHAPES,
+        Against::CannotTell,
+    ),
+    (
+        "sensor_filter_drag_exponent",
+        6,
+        SPEED_SHAPES,
+        Against::NamedPreferred,
+    ),
+    ("force_sensor_lag", 5, SENSOR_LAG, Against::Same),
+    ("force_sensor_lag", 6, SENSOR_LAG, Against::Same),
+    ("force_sensor_2nd_order", 5, SENSOR_LAG, Against::CannotTell),
+    (
+        "force_sensor_2nd_order",
+        6,
+        SENSOR_LAG,
+        Against::NamedPreferred,
+    ),
+    ("lag_offset", 5, LAG_PRECISION, Against::CannotTell),
+    ("lag_offset", 6, LAG_PRECISION, Against::CannotTell),
 ];
+
+/// What the truth's own effects show against the model named, fitted as the search fits a model
+/// and scored on the same folds (`diagnose --compare`, the effects the stand hides): whether a
+/// limit is the data's (they cannot tell the two apart, or prefer the model named) or the
+/// selection's (they prefer the truth's).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Against {
+    /// The model named holds the truth's effects (a value off, or a tie listed beside it).
+    Same,
+    /// The data cannot tell the two apart.
+    CannotTell,
+    /// The data prefer the model named.
+    NamedPreferred,
+    /// The data prefer the truth's effects, and the acceleration equation confirms them: the
+    /// search did not reach that model.
+    TruthPreferred,
+    /// The data prefer the truth's effects by the simulated velocity while the acceleration
+    /// equation alone gains under 0.5 % (rule 4's floor) or loses: where rule 4 rejected them
+    /// (the drag exponent beside an offset, in the report's round 2) or the search did not
+    /// reach them (no round tried them together).
+    TruthPreferredBySimulation,
+}
+
+impl Against {
+    fn of(r: &Report) -> Option<Against> {
+        let c = r.compared.as_ref()?;
+        Some(match c.preferred {
+            Preference::Same => Against::Same,
+            Preference::Neither => Against::CannotTell,
+            Preference::Named => Against::NamedPreferred,
+            Preference::Asked if c.equation.mean < NEAR_MISS_GAIN => {
+                Against::TruthPreferredBySimulation
+            }
+            Preference::Asked => Against::TruthPreferred,
+        })
+    }
+}
 
 /// A 15 ms lag beside a 0.02 N·m offset named at 17.2 and 13.4 ms (+15 % and −11 %; 14.7–16.3 ms
 /// on seeds 1–4): the lag's spread on this stand's noise is wider than the 10 % judged.
@@ -131,9 +241,13 @@ const SILENTLY_WRONG: &[(&str, u64)] = &[];
 /// tuned a 15 ms lag to 0.4 ms.
 const LAG_UNDER_A_TERM: &str = "a lag beside a torque term that absorbs it in the first round";
 
-/// ω, |ω|^p and a constant over the sine's 816–2449 rad/s: the diagnosis reports viscous and
-/// exponent as tied (the stand's ideal report does not), or names an offset for a sensor filter
-/// plus an exponent.
+/// A drag exponent of 1.8 beside an offset: found at its value in round 2 and rejected by rule 4
+/// (the acceleration equation gains 0.44–0.49 %, under its 0.5 %, while the simulated velocity
+/// gains most of the 0.8–0.9: `Against::TruthPreferredBySimulation` on five seeds); a constant
+/// torque 23 % above the offset is named. A sensor filter beside an exponent of 2.2: an offset
+/// named first takes part of the filter's phase, and the search's tuning does not reach the
+/// truth's values from these data (the truth's effects tuned as the search tunes them do no
+/// better than the model named, except on seed 2).
 const SPEED_SHAPES: &str =
     "torque shapes of speed the sine's band does not separate for the selection";
 
@@ -180,7 +294,19 @@ fn diagnosed(out: &Path, case: &str, seed: u64) -> (Report, Value) {
     let json = std::fs::read_to_string(out.join(format!("{case}-seed{seed}.json"))).unwrap();
     let truth: Value = serde_json::from_str(&json).unwrap();
     let (samples, _) = read_samples(&tsv).expect("the stand's TSV reads");
-    let r = diagnose(&samples, Options::default()).expect("diagnosis runs");
+    // The truth's own effects scored beside the model named (`Against`).
+    let compare = truth["effects"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|e| e["name"].as_str())
+        .try_fold(EffectSet::EMPTY, |set, name| set.with(kind(name)))
+        .expect("the stand's effects make one model");
+    let options = Options {
+        compare,
+        ..Options::default()
+    };
+    let r = diagnose(&samples, options).expect("diagnosis runs");
     (r, truth)
 }
 
@@ -290,6 +416,8 @@ fn the_independent_stand_is_diagnosed_right() {
     let noise_scale: Option<String> = std::env::var("PROPID_NOISE_SCALE").ok();
     let scale_arg = noise_scale.clone().unwrap_or_else(|| "1".into());
     let mut silent = 0;
+    // Of the runs not right, what the truth's effects show against the model named.
+    let mut tally = std::collections::BTreeMap::<String, usize>::new();
     // The stand draws the next seed while this one is diagnosed (two cores: the step's time is
     // the larger of the two, not their sum).
     let (drawn, draws) = std::sync::mpsc::channel();
@@ -326,22 +454,49 @@ fn the_independent_stand_is_diagnosed_right() {
             }
             let limit = KNOWN_LIMITS
                 .iter()
-                .find(|&&(c, s, _)| c == case && s == seed);
+                .find(|&&(c, s, _, _)| c == case && s == seed);
             let outcome = match (bad.is_empty(), limit) {
                 (true, None) => "right",
                 (true, Some(_)) => "FIXED",
                 (false, Some(_)) => "limit",
                 (false, None) => "WRONG",
             };
+            let against = Against::of(&r);
             say(format!(
-                "{case:<30} {seed:>4}  {outcome:<7} {}{}",
+                "{case:<30} {seed:>4}  {outcome:<7} {}{}{}",
                 describe(&r),
                 if bad.is_empty() {
                     String::new()
                 } else {
                     format!("\n{:>44}{}", "", bad.join("; "))
+                },
+                match (&r.compared, against) {
+                    (Some(c), Some(a)) if !bad.is_empty() => format!(
+                        "\n{:>44}the truth's effects: {a:?} (gain {:+.3} ± {:.3}, equation {:+.4}) [{}] J {:.4e}",
+                        "",
+                        c.gain.mean,
+                        c.gain.stderr,
+                        c.equation.mean,
+                        c.effects
+                            .iter()
+                            .map(|e| format!("{}={:.4e}", e.effect, e.value))
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                        c.model.inertia
+                    ),
+                    _ => String::new(),
                 }
             ));
+            if let Some(a) = against.filter(|_| !bad.is_empty()) {
+                *tally.entry(format!("{a:?}")).or_insert(0) += 1;
+            }
+            if let (Some(&(_, _, _, ledger)), Some(a), None) = (limit, against, &noise_scale) {
+                if ledger != a {
+                    wrong.push(format!(
+                        "{case} seed {seed}: the truth's effects against the model named: {a:?}, the ledger says {ledger:?}"
+                    ));
+                }
+            }
             if silently_wrong(&r, truth_of(&truth)) {
                 silent += 1;
                 say(format!("{case} seed {seed}: SILENTLY WRONG"));
@@ -368,6 +523,9 @@ fn the_independent_stand_is_diagnosed_right() {
         }
     }
     generator.join().expect("the stand's thread ends");
+    say(format!(
+        "the truth's effects against the model named, on the runs not right: {tally:?}"
+    ));
     let total = CASES.len() * seeds.len();
     if let Some(scale) = noise_scale {
         say(format!(

@@ -39,6 +39,12 @@ pub struct Args {
     /// Largest number of effects to name (at least 1; the seed's model alone is `propid fit`).
     #[arg(long, default_value_t = 3, value_parser = at_least_one)]
     pub max_effects: usize,
+    /// A model to fit and score beside the one the diagnosis names: effects separated by commas
+    /// (force_sensor_lag,drag_exponent). Each is tuned and fitted as the search would, and the
+    /// report says which of the two models the held-out data prefer, or that they cannot tell
+    /// them apart.
+    #[arg(long, value_name = "EFFECTS")]
+    pub compare: Option<propid_science::diagnose::EffectSet>,
     /// How the columns are read.
     #[command(flatten)]
     pub reading: super::ReadingArgs,
@@ -138,6 +144,7 @@ impl Args {
         Options {
             max_effects: self.max_effects,
             reading: self.reading.reading(),
+            compare: self.compare.unwrap_or_default(),
         }
     }
 }

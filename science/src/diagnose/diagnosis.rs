@@ -6,13 +6,14 @@
 use propid_io::InputError;
 
 use super::candidate::{separating_run, BaseTerm, EffectKind};
+use super::compare::{Compared, EffectSet, Preference};
 use super::engine::{fit, fit_every_row, fit_on_all, held_out_residuals, residuals, Fit};
 use super::model::{Effect, Model};
 use super::report::{
     Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
     ResidualAnalysis, SimulationOnly, SimulationRms, Traces, Unexplained, Unidentified, Verdict,
 };
-use super::search::{estimate_of, search, Found, Scored, Tie};
+use super::search::{estimate_of, fit_set, judged, search, Found, Scored, Tie};
 use super::select::{self, Decision, Evidence};
 use super::signals::{correlation, Signals};
 use super::simulate::{rms_error, simulate, SimPlan};
@@ -159,6 +160,15 @@ pub(crate) fn run(
     let plan = SimPlan::new(s);
     let found = search(s, &plan, options.max_effects, progress).ok_or_else(unfit)?;
     notes.extend(found.notes.iter().cloned());
+    let compared = (!options.compare.is_empty())
+        .then(|| compared(&found, options.compare, s, &plan))
+        .flatten();
+    if !options.compare.is_empty() && compared.is_none() {
+        notes.push(format!(
+            "the model asked about ({}) cannot be fitted on these data",
+            options.compare
+        ));
+    }
 
     progress(Stage::Extended);
     let model = found.model.model.clone();
@@ -305,6 +315,7 @@ pub(crate) fn run(
         concentration,
         left_out,
         simulation_only,
+        compared,
         notes,
         traces,
     };
@@ -338,6 +349,49 @@ fn simulation_only(found: &Found, extended: &BaseModel, s: &Signals) -> Option<S
             c2_with: with.c2,
             value_stderr: u.unresolved.then_some(u.estimate.stderr),
         })
+    })
+}
+
+/// The model of `set` fitted and scored beside the one the search named (see `compare`).
+fn compared(found: &Found, set: EffectSet, s: &Signals, plan: &SimPlan) -> Option<Compared> {
+    let asked = fit_set(set, s, plan)?;
+    let model = &asked.model;
+    let fit = fit_on_all(model, s)?;
+    let mut effects = Vec::new();
+    let mut inadmissible = Vec::new();
+    for (i, e) in model.effects.iter().enumerate() {
+        let (estimate, admissible) = judged(model, i, &fit, s);
+        effects.push(EffectValue {
+            effect: e.kind,
+            value: estimate.value,
+            unit: e.kind.unit(),
+        });
+        if let Err(why) = admissible {
+            inadmissible.push((e.kind, why.to_string()));
+        }
+    }
+    let (named, theirs) = (found.model.errors(), asked.errors());
+    let same = found.model.model.effects.len() == model.effects.len()
+        && model.effects.iter().all(|e| found.model.model.has(e.kind));
+    let (equation, simulation) = select::Gain::parts(&named, &theirs);
+    let preferred = if same {
+        Preference::Same
+    } else if select::separates(&named, &theirs) {
+        Preference::Asked
+    } else if select::separates(&theirs, &named) {
+        Preference::Named
+    } else {
+        Preference::Neither
+    };
+    Some(Compared {
+        asked: set.iter().collect(),
+        effects,
+        inadmissible,
+        model: base_model_of(&fit, model, s),
+        gain: select::Gain::of(&named, &theirs),
+        equation,
+        simulation,
+        preferred,
     })
 }
 

@@ -20,6 +20,7 @@
 //! docs/SCIENCE.md.
 
 mod candidate;
+mod compare;
 mod diagnosis;
 mod engine;
 mod gate;
@@ -36,6 +37,7 @@ mod tune;
 
 pub(crate) use candidate::Design;
 pub use candidate::{EffectKind, Estimate, Inadmissible, RESOLVED};
+pub use compare::{Compared, EffectSet, Preference};
 #[doc(hidden)]
 pub use engine::ROWS;
 pub use gate::CannotJudge;
@@ -100,6 +102,8 @@ pub struct Options {
     pub max_effects: usize,
     /// How the columns are read (a reversed torque sign, a velocity in rpm).
     pub reading: Reading,
+    /// A model to fit and score beside the one named (`--compare`); empty: none.
+    pub compare: EffectSet,
 }
 
 impl Default for Options {
@@ -107,6 +111,7 @@ impl Default for Options {
         Options {
             max_effects: 3,
             reading: Reading::default(),
+            compare: EffectSet::EMPTY,
         }
     }
 }

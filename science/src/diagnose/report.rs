@@ -397,6 +397,9 @@ pub struct Report {
     /// What the simulated velocity still shows that the equation does not confirm, where J or
     /// c2 move with it.
     pub simulation_only: Option<SimulationOnly>,
+    /// The model asked about (`Options::compare`), fitted and scored beside the one named (null
+    /// where none was asked about).
+    pub compared: Option<super::Compared>,
     /// Effects the data cannot tell from one that is named.
     pub ambiguities: Vec<Ambiguity>,
     /// Candidates that came close to being named, best first.
@@ -466,6 +469,7 @@ impl Report {
             concentration: None,
             left_out: None,
             simulation_only: None,
+            compared: None,
             notes: Vec::new(),
             traces: Traces::default(),
         }

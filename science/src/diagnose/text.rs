@@ -236,6 +236,9 @@ pub fn to_text(r: &Report, source: &str) -> String {
     for n in &r.notes {
         s += &format!("   Note: {n}\n");
     }
+    if let Some(c) = &r.compared {
+        s += &c.text();
+    }
     s
 }
 

@@ -26,7 +26,10 @@ use super::simulate::{fold_scores, FoldScores, SimPlan};
 use super::tune::{objective_of, Tuner};
 use super::{Observer, Stage};
 
+mod compare;
 mod pairs;
+
+pub(crate) use compare::fit_set;
 
 /// How one effect scored when it was tried.
 #[derive(Clone, Debug, Serialize)]
