@@ -5,10 +5,9 @@ mod common;
 
 use common::{propid, propid_ok, write_rows};
 
-#[test]
-fn sim_then_diagnose_finds_a_hidden_torque_lag() {
-    let dir = tempfile::tempdir().unwrap();
-    let tsv = dir.path().join("stand.tsv");
+/// `propid sim`'s 30 s chirp with a hidden 12 ms torque lag, written into `dir`.
+fn hidden_lag(dir: &std::path::Path) -> std::path::PathBuf {
+    let tsv = dir.join("stand.tsv");
     propid_ok(&[
         "sim",
         "--pattern",
@@ -22,6 +21,13 @@ fn sim_then_diagnose_finds_a_hidden_torque_lag() {
         "-o",
         tsv.to_str().unwrap(),
     ]);
+    tsv
+}
+
+#[test]
+fn sim_then_diagnose_finds_a_hidden_torque_lag() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = hidden_lag(dir.path());
     let plot = dir.path().join("diag.svg");
     let out = propid_ok(&[
         "diagnose",
@@ -207,21 +213,8 @@ fn import_then_diagnose_a_real_log() {
 #[test]
 fn compare_scores_a_model_asked_about_beside_the_one_named() {
     let dir = tempfile::tempdir().unwrap();
-    let tsv = dir.path().join("stand.tsv");
+    let tsv = hidden_lag(dir.path());
     let tsv = tsv.to_str().unwrap();
-    propid_ok(&[
-        "sim",
-        "--pattern",
-        "chirp",
-        "--duration",
-        "30",
-        "--torque-lag",
-        "0.012",
-        "--seed",
-        "3",
-        "-o",
-        tsv,
-    ]);
     let json = |compare: &str| -> serde_json::Value {
         let out = propid_ok(&["diagnose", tsv, "--format", "json", "--compare", compare]);
         serde_json::from_slice(&out.stdout).unwrap()
