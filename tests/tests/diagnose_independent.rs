@@ -191,8 +191,8 @@ enum Against {
     TruthPreferred,
     /// The data prefer the truth's effects by the simulated velocity while the acceleration
     /// equation alone gains under 0.5 % (rule 4's floor) or loses: where rule 4 rejected them
-    /// (the drag exponent beside an offset, in the report's round 2) or the search did not
-    /// reach them (no round tried them together).
+    /// (the drag exponent beside an offset in the report's round 2, a sensor filter as what the
+    /// simulated velocity alone shows) or the report gives them as rule 10's tie.
     TruthPreferredBySimulation,
 }
 
