@@ -1101,13 +1101,19 @@ fn esc32_braking_or_a_constant_torque_is_not_decided_by_these_logs() {
     ] {
         let imported = import_autoquad(&data(&format!("autoquad/{name}.csv")), kv).unwrap();
         let r = diagnose(&samples(&imported.rows), options).unwrap();
-        let c = r.compared.as_ref().expect("the model asked about is fitted");
+        let c = r
+            .compared
+            .as_ref()
+            .expect("the model asked about is fitted");
         assert_eq!(c.preferred, Preference::Neither, "{name}: {c:?}");
         printed("braking [mN·m]", c.effects[0].value * 1e3, braking, 2);
         printed("lag [ms]", c.effects[1].value * 1e3, lag, 1);
         printed("J with them [1e-5]", c.model.inertia * 1e5, inertia, 2);
         printed("gain over the model named", c.gain.mean, gain, 2);
         let apart = c.model.inertia / r.extended.inertia - 1.0;
-        assert!((0.18..=0.29).contains(&apart), "{name}: J {apart:+.3} apart");
+        assert!(
+            (0.18..=0.29).contains(&apart),
+            "{name}: J {apart:+.3} apart"
+        );
     }
 }
