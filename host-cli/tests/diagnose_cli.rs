@@ -208,8 +208,9 @@ fn import_then_diagnose_a_real_log() {
 
 /// `--compare`: a model the engineer asks about is fitted and scored beside the one named. On a
 /// hidden 12 ms torque lag, a Coulomb friction in its place is what the data reject (the model
-/// named preferred, by a gain the folds agree on), the lag itself is the model named, and a name
-/// propid does not know is refused before anything is read, naming the flag and the effects.
+/// named preferred, by a gain the folds agree on), a force sensor's lag there fits with a sign no
+/// sensor has (said, typed), the lag itself is the model named, and a name propid does not know
+/// is refused before anything is read, naming the flag and the effects.
 #[test]
 fn compare_scores_a_model_asked_about_beside_the_one_named() {
     let dir = tempfile::tempdir().unwrap();
@@ -228,6 +229,14 @@ fn compare_scores_a_model_asked_about_beside_the_one_named() {
     assert!(gain["mean"].as_f64().unwrap() < 0.0, "{gain}");
     assert_eq!(gain["folds_better"], 0, "{gain}");
     assert!(c["model"]["inertia"].as_f64().unwrap() > 0.0);
+
+    // A force sensor's lag in the torque lag's place fits with the sign no sensor can have: said
+    // so, typed.
+    let r = json("force_sensor_lag");
+    let c = &r["compared"];
+    assert_eq!(c["preferred"], "named", "{c}");
+    assert_eq!(c["inadmissible"][0]["effect"], "force_sensor_lag", "{c}");
+    assert_eq!(c["inadmissible"][0]["why"], "wrong_sign", "{c}");
 
     let r = json("torque_lag");
     assert_eq!(r["compared"]["preferred"], "same", "{}", r["compared"]);

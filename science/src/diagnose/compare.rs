@@ -11,7 +11,7 @@
 
 use serde::Serialize;
 
-use super::candidate::{EffectKind, Enters, Slot};
+use super::candidate::{EffectKind, Enters, Inadmissible, Slot};
 use super::report::{BaseModel, EffectValue};
 use super::select::{Gain, NEAR_MISS_GAIN};
 
@@ -132,6 +132,16 @@ pub enum Preference {
     Neither,
 }
 
+/// An effect of the model asked about whose fitted value cannot be the effect.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct NotAdmissible {
+    /// Which effect.
+    pub effect: EffectKind,
+    /// Why its value cannot be it (serialised beside the effect: `why` and its figures).
+    #[serde(flatten)]
+    pub why: Inadmissible,
+}
+
 /// The model asked about, fitted and scored beside the one named.
 #[derive(Clone, Debug, Serialize)]
 pub struct Compared {
@@ -141,7 +151,7 @@ pub struct Compared {
     pub effects: Vec<EffectValue>,
     /// Those of its effects whose fitted value cannot be the effect (a negative lag, a friction
     /// that drives the rotor), with why.
-    pub inadmissible: Vec<(EffectKind, String)>,
+    pub inadmissible: Vec<NotAdmissible>,
     /// J and c2 under it.
     pub model: BaseModel,
     /// Its held-out gain over the model named (the selection's criterion: positive where it
@@ -182,8 +192,8 @@ impl Compared {
             self.model.inertia,
             self.model.c2
         );
-        for (kind, why) in &self.inadmissible {
-            s += &format!("   {kind}: {why}\n");
+        for n in &self.inadmissible {
+            s += &format!("   {}: {}\n", n.effect, n.why);
         }
         if self.preferred == Preference::Same {
             s += "   It holds the effects of the model named.\n";

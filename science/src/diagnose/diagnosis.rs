@@ -6,7 +6,7 @@
 use propid_io::InputError;
 
 use super::candidate::{separating_run, BaseTerm, EffectKind};
-use super::compare::{Compared, EffectSet, Preference};
+use super::compare::{Compared, EffectSet, NotAdmissible, Preference};
 use super::engine::{fit, fit_every_row, fit_on_all, held_out_residuals, residuals, Fit};
 use super::model::{Effect, Model};
 use super::report::{
@@ -367,7 +367,10 @@ fn compared(found: &Found, set: EffectSet, s: &Signals, plan: &SimPlan) -> Optio
             unit: e.kind.unit(),
         });
         if let Err(why) = admissible {
-            inadmissible.push((e.kind, why.to_string()));
+            inadmissible.push(NotAdmissible {
+                effect: e.kind,
+                why,
+            });
         }
     }
     let (named, theirs) = (found.model.errors(), asked.errors());

@@ -37,7 +37,7 @@ mod tune;
 
 pub(crate) use candidate::Design;
 pub use candidate::{EffectKind, Estimate, Inadmissible, RESOLVED};
-pub use compare::{Compared, EffectSet, Preference};
+pub use compare::{Compared, EffectSet, NotAdmissible, Preference};
 #[doc(hidden)]
 pub use engine::ROWS;
 pub use gate::CannotJudge;
