@@ -229,6 +229,8 @@ fn compare_scores_a_model_asked_about_beside_the_one_named() {
     assert!(gain["mean"].as_f64().unwrap() < 0.0, "{gain}");
     assert_eq!(gain["folds_better"], 0, "{gain}");
     assert!(c["model"]["inertia"].as_f64().unwrap() > 0.0);
+    // The run that tells a lag from a constant torque: a sweep of frequencies.
+    assert_eq!(c["separating_run"]["pattern"], "chirp", "{c}");
 
     // A force sensor's lag in the torque lag's place fits with the sign no sensor can have: said
     // so, typed.
@@ -240,6 +242,7 @@ fn compare_scores_a_model_asked_about_beside_the_one_named() {
 
     let r = json("torque_lag");
     assert_eq!(r["compared"]["preferred"], "same", "{}", r["compared"]);
+    assert!(r["compared"]["separating_run"].is_null());
     let lag = r["compared"]["effects"][0]["value"].as_f64().unwrap();
     assert!((lag / 0.012 - 1.0).abs() < 0.05, "lag {lag}");
 

@@ -12,7 +12,7 @@
 use serde::Serialize;
 
 use super::candidate::{EffectKind, Enters, Inadmissible, Slot};
-use super::report::{BaseModel, EffectValue};
+use super::report::{BaseModel, EffectValue, SeparatingRun};
 use super::select::{Gain, NEAR_MISS_GAIN};
 
 /// The effects of a model asked about: a set of the effects the search tries in the equation, at
@@ -163,6 +163,9 @@ pub struct Compared {
     pub simulation: Option<Gain>,
     /// Which of the two the data prefer.
     pub preferred: Preference,
+    /// The run that would separate the two models (by an effect one holds and the other does
+    /// not); `None` where they hold the same effects.
+    pub separating_run: Option<SeparatingRun>,
 }
 
 impl Compared {
@@ -199,8 +202,13 @@ impl Compared {
             s += "   It holds the effects of the model named.\n";
             return s;
         }
+        let run = |what: &str| {
+            self.separating_run
+                .as_ref()
+                .map_or(String::new(), |r| format!(" {what}: {}.", r.advice()))
+        };
         s += &format!(
-            "   Its held-out gain over the model named: {:+.3} ± {:.3} (equation {:+.3}, simulation {}), better in {}/{} folds: {}.\n",
+            "   Its held-out gain over the model named: {:+.3} ± {:.3} (equation {:+.3}, simulation {}), better in {}/{} folds: {}.{}\n",
             self.gain.mean,
             self.gain.stderr,
             self.equation.mean,
@@ -220,6 +228,11 @@ impl Compared {
                     .to_string(),
                 Preference::Named => "the data prefer the model named".to_string(),
                 Preference::Neither | Preference::Same => "the data cannot tell the two apart".to_string(),
+            },
+            match self.preferred {
+                Preference::Neither => run("To separate them"),
+                Preference::Asked if self.equation.mean < NEAR_MISS_GAIN => run("To confirm it"),
+                _ => String::new(),
             }
         );
         s
