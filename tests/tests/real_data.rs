@@ -1106,6 +1106,8 @@ fn esc32_braking_or_a_constant_torque_is_not_decided_by_these_logs() {
             .as_ref()
             .expect("the model asked about is fitted");
         assert_eq!(c.preferred, Preference::Neither, "{name}: {c:?}");
+        let run = c.separating_run.as_ref().expect("a run separates them");
+        assert_eq!(run.flags(), "--pattern steps", "{name}: {run:?}");
         printed("braking [mN·m]", c.effects[0].value * 1e3, braking, 2);
         printed("lag [ms]", c.effects[1].value * 1e3, lag, 1);
         printed("J with them [1e-5]", c.model.inertia * 1e5, inertia, 2);
