@@ -145,8 +145,9 @@ pub struct Outcome {
     pub seed_model_holds: Option<bool>,
     /// Whether the diagnosis finds something the model lacks on which these values depend (a
     /// candidate both held-out errors, or the simulated velocity with J or c2 moving, would take
-    /// but the rules do not name: `simulation_only`): the values are then the model's best fit,
-    /// not established. Absent when false.
+    /// but the rules do not name: `simulation_only`), or a model asked about does better
+    /// (`--compare`): the values are then the model's best fit, not established. Absent when
+    /// false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub incomplete: bool,
     /// Parameters the data do not identify (their values are not measurements).
@@ -246,7 +247,7 @@ impl Outcome {
             thrust: None,
             air: None,
             seed_model_holds: Some(r.verdict == Verdict::NothingWrong),
-            incomplete: r.simulation_only.is_some(),
+            incomplete: r.simulation_only.is_some() || r.asked_does_better(),
             not_identified: r
                 .unidentified
                 .iter()

@@ -490,6 +490,21 @@ fn the_independent_stand_is_diagnosed_right() {
             if let Some(a) = against.filter(|_| !bad.is_empty()) {
                 *tally.entry(format!("{a:?}")).or_insert(0) += 1;
             }
+            // Where the truth's effects do better than the model named, the report never says
+            // it explains the data, and the Result says its values are not established.
+            if r.asked_does_better() {
+                let text = Outcome::from_diagnosis(&r, 0, None)
+                    .map(|o| o.to_text())
+                    .unwrap_or_default();
+                if matches!(r.verdict, Verdict::NothingWrong | Verdict::Explained)
+                    || !text.contains("not established")
+                {
+                    wrong.push(format!(
+                        "{case} seed {seed}: the truth's effects do better, yet {:?}:\n{text}",
+                        r.verdict
+                    ));
+                }
+            }
             if let (Some(&(_, _, _, ledger)), Some(a), None) = (limit, against, &noise_scale) {
                 if ledger != a {
                     wrong.push(format!(

@@ -476,6 +476,15 @@ impl Report {
     }
 
     /// The verdict from what the report holds, in order of what matters most to a user.
+    /// Whether the model asked about (`--compare`) does better on held-out data than the one
+    /// named: the model named is then not the best these data support, and the report never says
+    /// it explains them.
+    pub fn asked_does_better(&self) -> bool {
+        self.compared
+            .as_ref()
+            .is_some_and(|c| c.preferred == super::Preference::Asked)
+    }
+
     pub(crate) fn conclude(&mut self) {
         if matches!(self.verdict, Verdict::CannotJudge { .. }) {
             return;
@@ -488,6 +497,7 @@ impl Report {
             || self.concentration.is_some()
             || self.left_out.is_some()
             || self.simulation_only.is_some()
+            || self.asked_does_better()
         {
             Verdict::Unexplained
         } else if self.effects.is_empty() {

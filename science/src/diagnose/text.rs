@@ -127,6 +127,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
         && r.unexplained.is_none()
         && r.concentration.is_none()
         && r.simulation_only.is_none()
+        && !r.asked_does_better()
     {
         if r.near_misses.is_empty() && identified {
             s += "   Nothing is wrong: no candidate effect improves the held-out fit, and the residual has no\n   structure left. The seed's model explains this data.\n";
@@ -232,6 +233,10 @@ pub fn to_text(r: &Report, source: &str) -> String {
             "   Unexplained: {}\n",
             simulation_only_sentence(o, &r.extended)
         );
+    }
+    if r.asked_does_better() {
+        s += "   Unexplained: the model asked about (5. below) does better on held-out data than the one named, which is\n   \
+              then not the best these data support\n";
     }
     for n in &r.notes {
         s += &format!("   Note: {n}\n");
