@@ -11,7 +11,7 @@
 
 use serde::Serialize;
 
-use super::candidate::{EffectKind, Enters, Inadmissible, Slot};
+use super::candidate::{separating_run, EffectKind, Enters, Inadmissible, Shape, Slot};
 use super::report::{BaseModel, EffectValue, SeparatingRun};
 use super::select::{Gain, NEAR_MISS_GAIN};
 
@@ -239,6 +239,30 @@ impl Compared {
     }
 }
 
+/// The run that separates two models, from the effects only the first holds and those only
+/// the second holds: of two such effects, a pair that is not two constant torques first (a
+/// Coulomb friction against an offset is a twin the reversing run settles; an exponent beside the
+/// offset is what the models differ by); where only one model holds more, the run that reveals
+/// its first such effect; `None` where they hold the same effects.
+pub(crate) fn run_between(
+    first_only: &[EffectKind],
+    second_only: &[EffectKind],
+) -> Option<SeparatingRun> {
+    let constant = |k: EffectKind| matches!(k.candidate().shape(), Shape::Constant { .. });
+    first_only
+        .iter()
+        .flat_map(|&a| second_only.iter().map(move |&b| (a, b)))
+        .min_by_key(|&(a, b)| constant(a) && constant(b))
+        .map(|(a, b)| separating_run(a, b))
+        .or_else(|| {
+            first_only
+                .iter()
+                .chain(second_only)
+                .next()
+                .map(|k| k.candidate().revealing_run())
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -251,6 +275,27 @@ mod tests {
             [EffectKind::DragExponent, EffectKind::ForceSensorLag]
         );
         assert_eq!(set.to_string(), "drag_exponent,force_sensor_lag");
+    }
+
+    #[test]
+    fn the_separating_run_is_for_what_the_models_differ_by() {
+        use EffectKind::*;
+        // A Coulomb friction against an offset and an exponent: the exponent's run (low speeds),
+        // not the twins' reversing one.
+        let run = run_between(&[CoulombFriction], &[ForceOffset, DragExponent]).unwrap();
+        assert_eq!(run.flags(), "--pattern steps --lo 0.02 --hi 0.9");
+        assert_eq!(
+            run_between(&[CoulombFriction], &[ForceOffset])
+                .unwrap()
+                .flags(),
+            "--pattern chirp --lo -0.5 --hi 0.9"
+        );
+        // One model holds more: the run that reveals it.
+        assert_eq!(
+            run_between(&[], &[TorqueLag]).map(|r| r.flags()),
+            Some(TorqueLag.candidate().revealing_run().flags())
+        );
+        assert!(run_between(&[], &[]).is_none());
     }
 
     #[test]

@@ -5,8 +5,8 @@
 
 use propid_io::InputError;
 
-use super::candidate::{separating_run, BaseTerm, EffectKind, Shape};
-use super::compare::{Compared, EffectSet, NotAdmissible, Preference};
+use super::candidate::{separating_run, BaseTerm, EffectKind};
+use super::compare::{run_between, Compared, EffectSet, NotAdmissible, Preference};
 use super::engine::{fit, fit_every_row, fit_on_all, held_out_residuals, residuals, Fit};
 use super::model::{Effect, Model};
 use super::report::{
@@ -386,9 +386,6 @@ fn compared(found: &Found, set: EffectSet, s: &Signals, plan: &SimPlan) -> Optio
     } else {
         Preference::Neither
     };
-    // The run for an effect one model holds and the other does not: of two such effects, a pair
-    // that is not two constant torques first (a Coulomb friction against an offset is a twin the
-    // reversing run settles; an exponent beside the offset is what the models differ by).
     let only = |a: &Model, b: &Model| -> Vec<EffectKind> {
         a.effects
             .iter()
@@ -396,23 +393,10 @@ fn compared(found: &Found, set: EffectSet, s: &Signals, plan: &SimPlan) -> Optio
             .filter(|k| !b.has(*k))
             .collect()
     };
-    let (named_only, asked_only) = (
-        only(&found.model.model, model),
-        only(model, &found.model.model),
+    let separating_run = run_between(
+        &only(&found.model.model, model),
+        &only(model, &found.model.model),
     );
-    let constant = |k: EffectKind| matches!(k.candidate().shape(), Shape::Constant { .. });
-    let separating_run = named_only
-        .iter()
-        .flat_map(|&a| asked_only.iter().map(move |&b| (a, b)))
-        .min_by_key(|&(a, b)| constant(a) && constant(b))
-        .map(|(a, b)| separating_run(a, b))
-        .or_else(|| {
-            named_only
-                .iter()
-                .chain(&asked_only)
-                .next()
-                .map(|k| k.candidate().revealing_run())
-        });
     Some(Compared {
         asked: set.iter().collect(),
         effects,

@@ -475,7 +475,6 @@ impl Report {
         }
     }
 
-    /// The verdict from what the report holds, in order of what matters most to a user.
     /// Whether the model asked about (`--compare`) does better on held-out data than the one
     /// named: the model named is then not the best these data support, and the report never says
     /// it explains them.
@@ -485,6 +484,7 @@ impl Report {
             .is_some_and(|c| c.preferred == super::Preference::Asked)
     }
 
+    /// The verdict from what the report holds, in order of what matters most to a user.
     pub(crate) fn conclude(&mut self) {
         if matches!(self.verdict, Verdict::CannotJudge { .. }) {
             return;
