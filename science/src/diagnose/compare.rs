@@ -11,6 +11,8 @@
 
 use serde::Serialize;
 
+use crate::propulsion::quantity::with_unit;
+
 use super::candidate::{separating_run, EffectKind, Enters, Inadmissible, Shape, Slot};
 use super::report::{BaseModel, EffectValue, SeparatingRun};
 use super::select::{Gain, NEAR_MISS_GAIN};
@@ -176,14 +178,7 @@ impl Compared {
         let values: Vec<String> = self
             .effects
             .iter()
-            .map(|e| {
-                let unit = if e.unit == "1" {
-                    String::new()
-                } else {
-                    format!(" {}", e.unit)
-                };
-                format!("{} = {:.4e}{unit}", e.effect, e.value)
-            })
+            .map(|e| format!("{} = {:.4e}{}", e.effect, e.value, with_unit(e.unit)))
             .collect();
         let mut s = format!(
             "\n5. The model asked about (--compare {asked}), fitted and scored as the search would:\n   {}\n   J = {:.4e} kg·m², c2 = {:.4e} N·m·s²/rad²\n",

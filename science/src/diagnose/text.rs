@@ -6,6 +6,7 @@ use super::structure::{Condition, LeftOut};
 use super::EffectKind;
 use super::{Report, Verdict};
 use crate::figure::{Figure, Panel, Series, Style};
+use crate::propulsion::quantity::with_unit;
 
 /// A readable report.
 pub fn to_text(r: &Report, source: &str) -> String {
@@ -72,13 +73,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
             }
         };
         let value = if c.value.is_finite() {
-            let unit = c.effect.unit();
-            let unit = if unit == "1" {
-                String::new()
-            } else {
-                format!(" {unit}")
-            };
-            format!("{:.4e}{unit}", c.value)
+            format!("{:.4e}{}", c.value, with_unit(c.effect.unit()))
         } else {
             "–".into()
         };
@@ -144,11 +139,7 @@ pub fn to_text(r: &Report, source: &str) -> String {
         s += "   Close to being named as well (consistent across the folds, the simulation agreeing; evidence, not a verdict):\n";
     }
     for m in &r.near_misses {
-        let unit = if m.unit == "1" {
-            String::new()
-        } else {
-            format!(" {}", m.unit)
-        };
+        let unit = with_unit(m.unit);
         s += &format!(
             "     {} = {:.4e}{unit}: held-out gain {:.2} %, simulated velocity {:+.1} %\n",
             m.effect, m.value, m.cv_gain_percent, m.simulation_gain_percent
@@ -364,11 +355,7 @@ fn decision_words(effect: EffectKind, d: &Decision) -> String {
 /// What the simulated velocity shows and the equation does not confirm, in a sentence (the
 /// report's text and the Result's warning).
 pub fn simulation_only_sentence(o: &SimulationOnly, extended: &BaseModel) -> String {
-    let unit = if o.unit == "1" {
-        String::new()
-    } else {
-        format!(" {}", o.unit)
-    };
+    let unit = with_unit(o.unit);
     if let Some(se) = o.value_stderr {
         return format!(
             "the model does not explain these data: both held-out errors drop consistently with {0} = {2:.4e} ± {6:.1e}{unit} (the simulated velocity's by {1:.1} %, the acceleration equation's by {3:+.2} %), a value they do not resolve from zero: it stands in for something the model lacks, and J and c2 are not established (with it J reads {4:+.1} % and c2 {5:+.1} %)",

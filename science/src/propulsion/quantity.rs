@@ -211,8 +211,8 @@ impl Quantity {
     }
 }
 
-/// " N·m", or nothing for a dimensionless "1".
-fn with_unit(unit: &str) -> String {
+/// " N·m", or nothing for a dimensionless "1" (how every report writes a unit after a value).
+pub(crate) fn with_unit(unit: &str) -> String {
     if unit == "1" || unit.is_empty() {
         String::new()
     } else {
