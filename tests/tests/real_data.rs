@@ -126,7 +126,7 @@ fn rcbench_drag_law_table() {
     let mean = c2s.iter().sum::<f64>() / c2s.len() as f64;
     printed("c2 half-spread %", 100.0 * (hi - lo) / (hi + lo), 1.6, 1);
     printed("mean c2", mean * 1e8, 5.9, 1);
-    let cq = 4.0 * std::f64::consts::PI.powi(2) * mean / (1.2 * 0.1778f64.powi(5));
+    let cq = 4.0 * std::f64::consts::PI.powi(2) * mean / (1.225 * 0.1778f64.powi(5));
     printed("C_Q", cq, 0.011, 3);
     // "load-cell torque every 150–163 ms, electrical rpm changing at 41–142 Hz".
     let (tlo, thi) = torque_dt
@@ -163,16 +163,20 @@ fn esc32_f40_a_constant_torque_and_a_telemetry_lag() {
     assert!(imported.assumptions.iter().any(|a| a.contains("Kt")));
     // The held speed at full duty: the longest run of one repeated velocity with the duty at 1.
     let command = imported.stand(propid_io::tsv::StandColumn::Command);
-    let (mut held, mut run) = ((0usize, f64::NAN), 0usize);
+    let (mut held, mut run) = ((0usize, f64::NAN, 0usize), 0usize);
     for (k, w) in imported.rows.windows(2).enumerate() {
         let same = w[1].sample.velocity == w[0].sample.velocity && command[k + 1] == 1.0;
         run = if same { run + 1 } else { 0 };
         if run > held.0 {
-            held = (run, w[1].sample.velocity);
+            held = (run, w[1].sample.velocity, k + 1);
         }
     }
     assert!(held.0 >= 90, "{held:?}");
     printed("held speed at full duty [rad/s]", held.1, 1662.2, 1);
+    // "repeats 1662.2 rad/s for a second (t = 99.7–100.7 s)".
+    let t = |row: usize| imported.rows[row].sample.t;
+    printed("held from [s]", t(held.2 - held.0), 99.7, 1);
+    printed("held until [s]", t(held.2), 100.7, 1);
     assert_eq!(r.verdict, Verdict::Ambiguous);
     let names: Vec<EffectKind> = r.effects.iter().map(|e| e.effect).collect();
     assert_eq!(
@@ -210,6 +214,13 @@ fn esc32_f40_a_constant_torque_and_a_telemetry_lag() {
     );
     printed("extended J [1e-5]", r.extended.inertia * 1e5, 2.35, 2);
     printed("extended c2 [1e-8]", r.extended.c2 * 1e8, 5.34, 2);
+    // "11 % and 13 % below the load cell's (§1) on the same motor and ESC": 11-05, F40, ESC32v3.
+    printed(
+        "below the load cell [%]",
+        100.0 * (1.0 - r.extended.c2 / 5.97e-8),
+        11.0,
+        0,
+    );
     printed("constant torque [mN·m]", r.effects[0].value * 1e3, 3.63, 2);
     printed("the lag [ms]", r.effects[1].value * 1e3, 37.2, 1);
     printed(
@@ -258,6 +269,13 @@ fn esc32_f60_remaining_error_is_localized() {
     );
     printed("extended J [1e-5]", r.extended.inertia * 1e5, 2.43, 2);
     printed("extended c2 [1e-8]", r.extended.c2 * 1e8, 5.12, 2);
+    // "... and 13 % below the load cell's": 11-07 18:43, F60, ESC32v3.
+    printed(
+        "below the load cell [%]",
+        100.0 * (1.0 - r.extended.c2 / 5.90e-8),
+        13.0,
+        0,
+    );
     printed("constant torque [mN·m]", r.effects[0].value * 1e3, 2.55, 2);
     printed(
         "simulation gain [%]",
@@ -1062,7 +1080,7 @@ fn esc32_logs_do_not_carry_the_open_firmwares_values_and_the_duty_steps_at_once(
             period
                 .iter()
                 .zip(&rpm)
-                .all(|(&p, &r)| p <= 35.0 && (r < 5000.0 || p <= 2.0)),
+                .all(|(&p, &r)| p <= 35.0 && (r < 5000.0 || p == 0.0 || p == 2.0)),
             "{name}: commutation period"
         );
         let off_level = duty
@@ -1094,10 +1112,11 @@ fn esc32_braking_or_a_constant_torque_is_not_decided_by_these_logs() {
         compare,
         ..Options::default()
     };
-    // (log, kv, braking [mN·m], lag [ms], J with them [1e-5], gain over the model named)
-    for (name, kv, braking, lag, inertia, gain) in [
-        ("f40_steps_5-2", 1600.0, 6.40, 46.3, 3.03, 0.00),
-        ("esc32v3_f60-1", 1750.0, 5.26, 33.3, 2.87, 0.42),
+    // (log, kv, braking [mN·m], lag [ms], J with them [1e-5], gain over the model named,
+    // J with them over the J named, % above)
+    for (name, kv, braking, lag, inertia, gain, apart) in [
+        ("f40_steps_5-2", 1600.0, 6.40, 46.3, 3.03, 0.00, 29.0),
+        ("esc32v3_f60-1", 1750.0, 5.26, 33.3, 2.87, 0.42, 18.0),
     ] {
         let imported = import_autoquad(&data(&format!("autoquad/{name}.csv")), kv).unwrap();
         let r = diagnose(&samples(&imported.rows), options).unwrap();
@@ -1112,10 +1131,12 @@ fn esc32_braking_or_a_constant_torque_is_not_decided_by_these_logs() {
         printed("lag [ms]", c.effects[1].value * 1e3, lag, 1);
         printed("J with them [1e-5]", c.model.inertia * 1e5, inertia, 2);
         printed("gain over the model named", c.gain.mean, gain, 2);
-        let apart = c.model.inertia / r.extended.inertia - 1.0;
-        assert!(
-            (0.18..=0.29).contains(&apart),
-            "{name}: J {apart:+.3} apart"
+        // "J differs between them by 18–29 %".
+        printed(
+            "J with them over the J named [%]",
+            100.0 * (c.model.inertia / r.extended.inertia - 1.0),
+            apart,
+            0,
         );
     }
 }
