@@ -216,6 +216,32 @@ fn c_t_and_c_q_of_the_six_logs_at_12000_rpm() {
     let (ct80, cq80) = (got[5][0].0, got[5][1].0);
     printed("F80/F60 C_T", ct80 / ct60, 0.950, 3);
     printed("F80/F60 C_Q", cq80 / cq60, 0.950, 3);
+    // "5 % thinner air (a room about 15 °C warmer, or 51 hPa lower pressure), or an rpm reading
+    // 2.6 % high": the density ratio at 20 °C and 1013.25 hPa, and the speed scale that lowers
+    // C_T (∝ 1/n²) by the same factor.
+    let ratio = ct80 / ct60;
+    printed("warmer [K]", 293.15 * (1.0 / ratio - 1.0), 15.0, 0);
+    printed("lower pressure [hPa]", 1013.25 * (1.0 - ratio), 51.0, 0);
+    printed(
+        "rpm reading high [%]",
+        100.0 * (1.0 / ratio.sqrt() - 1.0),
+        2.6,
+        1,
+    );
+    // "thrust ∝ n^p with p = 2.21–2.26 on the six runs, torque with p = 2.03–2.07".
+    let range = |k: usize| {
+        exponents
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), e: &(f64, f64)| {
+                let v = if k == 0 { e.0 } else { e.1 };
+                (l.min(v), h.max(v))
+            })
+    };
+    assert_eq!(exponents.len(), 6);
+    printed("lowest thrust exponent", range(0).0, 2.21, 2);
+    printed("highest thrust exponent", range(0).1, 2.26, 2);
+    printed("lowest torque exponent", range(1).0, 2.03, 2);
+    printed("highest torque exponent", range(1).1, 2.07, 2);
 }
 
 /// Published static coefficients, UIUC Propeller Database (J. B. Brandt, R. W. Deters,

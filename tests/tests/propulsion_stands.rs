@@ -301,6 +301,12 @@ fn mechanism_stand_on_the_seed_sine_every_constant_within_2_percent() {
     let p = identify(&rec, &options()).unwrap();
     assert!(p.operating_points.is_empty());
     check_mech(&p, false);
+    within(
+        "current filter [s]",
+        p.motor.as_ref().unwrap().current_filter.as_ref().unwrap(),
+        mech_config().instruments.bus.unwrap().current_filter,
+        0.02,
+    );
     // The thrust cell is a mass-spring-damper: at low frequency a lag of 2ζ/ω_n.
     let lag = p.thrust.as_ref().unwrap().sensor_lag.as_ref().unwrap();
     within(
