@@ -45,5 +45,6 @@ if [ -n "${BEFORE:-}" ]; then
 fi
 grep -q "torque_lag .*← named" "$dir/out_now" || { echo "the hidden torque lag was not named" >&2; exit 1; }
 # This build's reading of the hidden 8 ms lag, and J and c2 (truth 2e-5 and 1.5e-8), as its Result
-# prints them.
+# prints them, and the held-out gain of the model named.
 grep -m 3 -E '^   (J|c2|torque_lag) +=' "$dir/out_now"
+grep -m 1 -E '^   Simulated-velocity RMS error on held-out data' "$dir/out_now"

@@ -57,6 +57,15 @@ fn ours(file: &std::path::Path, opts: &[&str]) -> (f64, f64, f64) {
     )
 }
 
+/// One unit of the sixth significant digit of a printed value (0 for an exact 0).
+fn sixth_digit(printed: f64) -> f64 {
+    if printed == 0.0 {
+        0.0
+    } else {
+        10f64.powf(printed.abs().log10().floor() - 5.0) * (1.0 + 1e-9)
+    }
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     if a == b {
         0.0
@@ -110,13 +119,14 @@ fn agrees_with_the_seed_where_it_converges() {
         let (sm, sc1, sc2) = seed(&file, opts);
         let (m, c1, c2) = ours(&file, opts);
         eprintln!("{what}: seed ({sm}, {sc1}, {sc2}) propid ({m}, {c1}, {c2})");
-        // The seed prints 6 significant digits.
-        assert!(rel(sm, m) < 1e-4, "{what}: mass seed {sm} propid {m}");
-        assert!(rel(sc2, c2) < 1e-4, "{what}: c2 seed {sc2} propid {c2}");
-        assert!(
-            (sc1 - c1).abs() <= 1e-4 * sc1.abs().max(1e-9) + 1e-9,
-            "{what}: c1 seed {sc1} propid {c1}"
-        );
+        // The seed prints 6 significant digits; README: propid agrees with them, within one unit
+        // of the sixth (the seed's L-BFGS-B stops short of the exact minimum by less than that).
+        for (name, printed, exact) in [("mass", sm, m), ("c1", sc1, c1), ("c2", sc2, c2)] {
+            assert!(
+                (printed - exact).abs() <= sixth_digit(printed),
+                "{what}: {name} seed {printed} propid {exact}"
+            );
+        }
         assert!(
             holds(m, c1, c2),
             "{what}: ({m}, {c1}, {c2}) does not exercise what the case claims"

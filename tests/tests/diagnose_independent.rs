@@ -211,7 +211,7 @@ impl Against {
     }
 }
 
-/// A 15 ms lag beside a 0.02 N·m offset named at 17.2 and 13.4 ms (+15 % and −11 %; 14.7–16.3 ms
+/// A 15 ms lag beside a 0.02 N·m offset named at 17.2 and 13.4 ms (+15 % and −11 %; 13.5–16.3 ms
 /// on seeds 1–4): the lag's spread on this stand's noise is wider than the 10 % judged.
 const LAG_PRECISION: &str = "a lag's value beside an offset, 11–15 % off on two draws";
 
@@ -468,7 +468,17 @@ fn the_independent_stand_is_diagnosed_right() {
                 if bad.is_empty() {
                     String::new()
                 } else {
-                    format!("\n{:>44}{}", "", bad.join("; "))
+                    format!(
+                        "\n{:>44}{}\n{:>44}J, drag of each model (named, then each tie's): {}",
+                        "",
+                        bad.join("; "),
+                        "",
+                        expect::model_errors(&r, truth_of(&truth))
+                            .iter()
+                            .map(|(j, d)| format!("{:+.2} %, {:+.2} %", 100.0 * j, 100.0 * d))
+                            .collect::<Vec<_>>()
+                            .join("; ")
+                    )
                 },
                 match (&r.compared, against) {
                     (Some(c), Some(a)) if !bad.is_empty() => format!(
@@ -514,7 +524,12 @@ fn the_independent_stand_is_diagnosed_right() {
             }
             if silently_wrong(&r, truth_of(&truth)) {
                 silent += 1;
-                say(format!("{case} seed {seed}: SILENTLY WRONG"));
+                let (j, drag) = fit_errors(&r, truth_of(&truth));
+                say(format!(
+                    "{case} seed {seed}: SILENTLY WRONG (J {:+.1} %, drag {:+.1} %)",
+                    100.0 * j,
+                    100.0 * drag
+                ));
             }
             if noise_scale.is_some() {
                 if bad.is_empty() {

@@ -205,8 +205,9 @@ fn a_small_swing_beside_the_torque_noise_is_corrected_by_diagnose() {
         let file = tsv(&samples);
         let (report, _) = fit_path(&file, &FitOptions::default(), &mut |_, _| {}).unwrap();
         let fitted = Outcome::from_fit(&report, false, None).inertia.value / config.inertia - 1.0;
+        // README: "`fit` reads J 14 % high" (13.9–14.5 % on these four draws).
         assert!(
-            (0.10..0.20).contains(&fitted),
+            (0.135..0.145).contains(&fitted),
             "seed {seed}: fit's J {:+.1} % (least squares, 14 % predicted)",
             100.0 * fitted
         );

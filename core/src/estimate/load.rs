@@ -224,11 +224,11 @@ mod tests {
         // f32 with magnitudes 1e-5 and 1e-8: column scaling and compensated sums keep it close.
         let g = e32.estimate(&LoadBounds::default()).unwrap();
         assert!(
-            ((g.mass as f64) / j - 1.0).abs() < 2e-3,
+            ((g.mass as f64) / j - 1.0).abs() < 1e-6,
             "f32 mass {}",
             g.mass
         );
-        assert!(((g.c2 as f64) / c2 - 1.0).abs() < 2e-3, "f32 c2 {}", g.c2);
+        assert!(((g.c2 as f64) / c2 - 1.0).abs() < 1e-6, "f32 c2 {}", g.c2);
     }
 
     #[test]

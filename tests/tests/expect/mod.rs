@@ -134,11 +134,30 @@ struct Reading {
     p: f64,
 }
 
-fn readings(r: &Report) -> Vec<Reading> {
-    let law = |b: &propid_science::diagnose::BaseModel| match (b.k, b.p) {
+/// A model's drag law as k·ω^p (the seed's c2·ω² where no exponent was fitted).
+fn law(b: &propid_science::diagnose::BaseModel) -> (f64, f64) {
+    match (b.k, b.p) {
         (Some(k), Some(p)) => (k, p),
         _ => (b.c2, 2.0),
-    };
+    }
+}
+
+/// J's and the drag's relative errors against the truth of the model named, then of each tie's
+/// alternative, in the report's order.
+pub fn model_errors(r: &Report, t: Truth) -> Vec<(f64, f64)> {
+    std::iter::once(&r.extended)
+        .chain(r.ambiguities.iter().map(|a| &a.alternative))
+        .map(|b| {
+            let (k, p) = law(b);
+            (
+                b.inertia / t.inertia - 1.0,
+                t.drag(b.c1, k, p) / t.drag(t.c1, t.k, t.p) - 1.0,
+            )
+        })
+        .collect()
+}
+
+fn readings(r: &Report) -> Vec<Reading> {
     let (k, p) = law(&r.extended);
     let mut out = vec![Reading {
         effects: r.effects.iter().map(|e| (e.effect, e.value)).collect(),
