@@ -509,6 +509,39 @@ mod tests {
             plan.predicted.rel_stderr_j < 0.8 * plan.seed_sine.rel_stderr_j,
             "{plan:#?}"
         );
+        // docs/PLANNING.md's figures, at the digits it prints (the design is deterministic):
+        // correlations 0.85 and 0.05, a square wave of 3 s period, 162 s, J 0.77 and c2 0.90 of
+        // the sine's error at the same length, and J alone in 1/0.77² = 1.7× less time.
+        let printed = |what: &str, v: f64, doc: f64, half: f64| {
+            assert!((v - doc).abs() <= half, "{what}: {v}, the docs print {doc}")
+        };
+        printed(
+            "sine",
+            find(&plan.seed_separations).correlation,
+            0.85,
+            0.005,
+        );
+        printed("plan", find(&plan.separations).correlation, 0.05, 0.005);
+        assert_eq!(plan.excitation.pattern, Pattern::Square);
+        printed("period [s]", plan.excitation.period, 3.0, 0.0);
+        printed("time [s]", plan.seconds_to_match_seed, 162.0, 0.5);
+        let j = plan.predicted.rel_stderr_j / plan.seed_sine.rel_stderr_j;
+        let c2 = plan.predicted.rel_stderr_c2 / plan.seed_sine.rel_stderr_c2;
+        assert_eq!(plan.predicted.seconds, plan.seed_sine.seconds);
+        printed("J's error ratio", j, 0.77, 0.005);
+        printed("c2's error ratio", c2, 0.90, 0.005);
+        printed("J alone, times less", 1.0 / (j * j), 1.7, 0.05);
+        // "Every pattern evaluated lands between 0.88 and 1.07 of the sine's c2 error per √s".
+        let sine_c2 = plan.seed_sine.rel_stderr_c2 * plan.seed_sine.seconds.sqrt();
+        let (lo, hi) = plan
+            .candidates
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), c| {
+                let r = c.precision.rel_stderr_c2 * c.precision.seconds.sqrt() / sine_c2;
+                (l.min(r), h.max(r))
+            });
+        printed("lowest c2 error per √s", lo, 0.88, 0.005);
+        printed("highest c2 error per √s", hi, 1.07, 0.005);
     }
 
     /// The standard deviation of J and c2 over noise seeds the design did not use.
