@@ -43,7 +43,7 @@ pub use engine::ROWS;
 pub use gate::CannotJudge;
 pub use model::LagShape;
 pub use report::{
-    Agreed, Ambiguity, BaseModel, EffectValue, NamedEffect, NearMiss, Parameter, Report,
+    Agreed, Ambiguity, BaseModel, DragLaw, EffectValue, NamedEffect, NearMiss, Parameter, Report,
     ResidualAnalysis, SeparatingRun, SimulationOnly, SimulationRms, Traces, Unexplained,
     Unidentified, Verdict, MAX_RELATIVE_STDERR,
 };
@@ -56,7 +56,6 @@ pub use select::{
 };
 #[doc(hidden)]
 pub use simulate::SIMULATED;
-pub use steady::DragLaw;
 pub use structure::{Concentration, Condition, LeftOut, CONCENTRATION_RATIO, EVENT_SHARE};
 pub use text::{figure as report_figure, left_out_sentence, simulation_only_sentence, to_text};
 

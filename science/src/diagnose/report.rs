@@ -7,8 +7,7 @@ use super::candidate::EffectKind;
 use super::gate::CannotJudge;
 use super::model::LagShape;
 use super::search::CandidateScore;
-use super::select::Gain;
-use super::steady::DragLaw;
+use super::select::{Decision, Gain};
 use super::structure::{Concentration, LeftOut};
 use crate::excitation::Pattern;
 
@@ -506,4 +505,31 @@ impl Report {
             Verdict::Explained
         };
     }
+}
+
+/// The drag law fitted from steady-state data (`steady`), when the inertia cannot be identified.
+#[derive(Clone, Debug, Serialize)]
+pub struct DragLaw {
+    /// Samples used (finite torque, speed above 10 % of the top).
+    pub samples: usize,
+    /// c2 of the seed's law F = c2·ω² + F₀ [N·m·s²/rad²].
+    pub c2: f64,
+    /// Offset F₀ of the seed's law [N·m].
+    pub offset: f64,
+    /// Exponent of the extended law.
+    pub exponent: f64,
+    /// Its standard error.
+    pub exponent_stderr: f64,
+    /// k of the extended law [N·m·(s/rad)^p].
+    pub k: f64,
+    /// Pooled held-out gain of the extended law over the seed's [%].
+    pub cv_gain_percent: f64,
+    /// The selection's criterion.
+    pub gain: Gain,
+    /// RMS torque residual of the seed's law [N·m].
+    pub rms_seed: f64,
+    /// RMS torque residual of the extended law [N·m].
+    pub rms_extended: f64,
+    /// What the selection decided about the exponent.
+    pub decision: Decision,
 }

@@ -18,40 +18,13 @@ use propid_core::estimate::NormalEquations;
 use super::candidate::{admissible_measured, EffectKind, Estimate};
 use super::model::Effect;
 use super::report::{
-    BaseModel, NamedEffect, Report, ResidualAnalysis, SimulationRms, Traces, Unidentified,
+    BaseModel, DragLaw, NamedEffect, Report, ResidualAnalysis, SimulationRms, Traces, Unidentified,
 };
 use super::select::{judge, Decision, Evidence, FoldErrors, Gain};
 use super::signals::Signals;
 use super::tune::golden;
 use super::FOLDS;
 use propid_io::InputError;
-
-/// The fitted law.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct DragLaw {
-    /// Samples used (finite torque, speed above 10 % of the top).
-    pub samples: usize,
-    /// c2 of the seed's law F = c2·ω² + F₀ [N·m·s²/rad²].
-    pub c2: f64,
-    /// Offset F₀ of the seed's law [N·m].
-    pub offset: f64,
-    /// Exponent of the extended law.
-    pub exponent: f64,
-    /// Its standard error.
-    pub exponent_stderr: f64,
-    /// k of the extended law [N·m·(s/rad)^p].
-    pub k: f64,
-    /// Pooled held-out gain of the extended law over the seed's [%].
-    pub cv_gain_percent: f64,
-    /// The selection's criterion.
-    pub gain: Gain,
-    /// RMS torque residual of the seed's law [N·m].
-    pub rms_seed: f64,
-    /// RMS torque residual of the extended law [N·m].
-    pub rms_extended: f64,
-    /// What the selection decided about the exponent.
-    pub decision: Decision,
-}
 
 fn folds(s: &Signals, idx: &[usize], p: f64) -> [NormalEquations<f64, 2>; FOLDS] {
     let mut eqs = [NormalEquations::<f64, 2>::new(); FOLDS];
