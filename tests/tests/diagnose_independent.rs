@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use expect::{
-    against_ledger, describe, fit_errors, judge, say, silently_wrong, Expected, Ties, Truth,
+    against_ledger, describe, fit_errors, judge, model_errors, say, silently_wrong, Expected, Ties,
+    Truth,
 };
 use propid_science::diagnose::{
     diagnose, read_samples, EffectKind, EffectSet, Options, Preference, Report, Verdict,
@@ -473,7 +474,7 @@ fn the_independent_stand_is_diagnosed_right() {
                         "",
                         bad.join("; "),
                         "",
-                        expect::model_errors(&r, truth_of(&truth))
+                        model_errors(&r, truth_of(&truth))
                             .iter()
                             .map(|(j, d)| format!("{:+.2} %, {:+.2} %", 100.0 * j, 100.0 * d))
                             .collect::<Vec<_>>()

@@ -294,11 +294,7 @@ pub fn judge(r: &Report, expected: &[Expected], ties: Ties, truth: Option<Truth>
 /// The extended model's J and its drag at the truth's speed, each relative to the truth's
 /// (0: exact).
 pub fn fit_errors(r: &Report, t: Truth) -> (f64, f64) {
-    let m = &readings(r)[0];
-    (
-        m.inertia / t.inertia - 1.0,
-        t.drag(m.c1, m.k, m.p) / t.drag(t.c1, t.k, t.p) - 1.0,
-    )
+    model_errors(r, t)[0]
 }
 
 /// What is wrong with the extended model's J and drag law against the truth, each within 2 %.
