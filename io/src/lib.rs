@@ -24,6 +24,7 @@
 pub mod candump;
 pub mod error;
 pub mod glitch;
+mod header;
 pub mod import;
 pub mod input;
 pub mod output;

@@ -578,7 +578,7 @@ impl<R: BufRead> TsvReader<R> {
         }
         for (i, want) in COLUMNS.iter().enumerate().take(5).skip(1) {
             if idx[i].is_none() {
-                if let Some(importer) = crate::import::recognise(header_trimmed) {
+                if let Some(importer) = crate::header::recognise(header_trimmed) {
                     return Err(at(ErrorKind::ForeignFormat(importer)));
                 }
                 return Err(at(ErrorKind::MissingColumn {

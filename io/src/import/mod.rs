@@ -28,7 +28,7 @@ mod rcbench;
 
 use std::path::Path;
 
-use crate::error::Importer;
+pub(crate) use crate::header::loose;
 use crate::input::LineLimit;
 use crate::tsv::{Row, StandColumn, TsvWriter};
 use crate::{ErrorKind, InputError};
@@ -440,35 +440,6 @@ pub(crate) fn csv_error(name: &str, e: &csv::Error, line: u64) -> InputError {
             .in_file(name)
             .at_line(line),
     }
-}
-
-/// The importer for a file whose first line is `header`, when it is a stand's own export (what a
-/// TSV reader tells a user who gave it one).
-pub fn recognise(header: &str) -> Option<Importer> {
-    let names: Vec<String> = header.split(',').map(loose).collect();
-    if names.len() < 3 {
-        return None;
-    }
-    let has = |n: &str| names.iter().any(|h| *h == loose(n));
-    let starts = |n: &str| names.iter().any(|h| h.starts_with(&loose(n)));
-    if has("Timestamp") && has("Amps") && has("RPM") && has("Duty") {
-        Some(Importer::Autoquad)
-    } else if (starts("Time (") || has("Time")) && (starts("Torque (") || starts("Thrust (")) {
-        Some(Importer::Rcbench)
-    } else {
-        None
-    }
-}
-
-/// A header name compared loosely: no byte-order mark, lower case, `µ`/`μ` as `u`, and no
-/// spaces, `·`, `-` or `.` (so `Torque (N·m)`, `Torque (N-m)` and `torque (Nm)` are one name).
-pub(crate) fn loose(name: &str) -> String {
-    name.trim_start_matches('\u{feff}')
-        .to_lowercase()
-        .replace(['µ', 'μ'], "u")
-        .chars()
-        .filter(|c| !matches!(c, ' ' | '·' | '-' | '.' | '\u{22c5}'))
-        .collect()
 }
 
 /// The first of `names` (compared loosely) that the header has: its index and the header's own
