@@ -285,3 +285,45 @@ fn the_limits_are_registers_and_speeds_take_rpm() {
         "{err}"
     );
 }
+
+/// The runs `propid diagnose` advises (`propid drive --pattern … --setpoint-rat-lo-hi="LO HI"`)
+/// are commands `drive` takes as printed (exit 0), the range (a negative low end too) reaching its
+/// register.
+#[test]
+fn the_runs_diagnose_advises_are_flags_drive_takes() {
+    use propid_science::diagnose::SeparatingRun;
+    use propid_science::excitation::Pattern;
+    let dir = tempfile::tempdir().unwrap();
+    let ids = [
+        ("UAVCAN__NODE__ID", "10"),
+        ("UAVCAN__PUB__SP_RAT__ID", "24"),
+        ("UAVCAN__SUB__FB_DYN__ID", "110"),
+    ];
+    for (pattern, lo, hi, range) in [
+        (Pattern::Chirp, Some(-0.5), Some(0.9), "-0.5 0.9"),
+        (Pattern::Steps, Some(0.02), None, "0.02 0.9"),
+        (Pattern::Chirp, None, None, "0.1 0.9"),
+    ] {
+        let run = SeparatingRun {
+            pattern,
+            lo,
+            hi,
+            why: "",
+        };
+        // The flags as a shell splits them: the quoted range is one argument.
+        let flags = run.flags();
+        let mut args: Vec<String> = Vec::new();
+        for (k, part) in flags.split('"').enumerate() {
+            if k % 2 == 1 {
+                let last = args.pop().unwrap();
+                args.push(format!("{last}{part}"));
+            } else {
+                args.extend(part.split_whitespace().map(str::to_owned));
+            }
+        }
+        args.push("--show-registers".into());
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let text = shown(&drive(dir.path(), &args, &ids));
+        assert_eq!(value(&text, "setpoint_rat_lo_hi"), range, "{flags}");
+    }
+}

@@ -276,12 +276,15 @@ mod tests {
         // A Coulomb friction against an offset and an exponent: the exponent's run (low speeds),
         // not the twins' reversing one.
         let run = run_between(&[CoulombFriction], &[ForceOffset, DragExponent]).unwrap();
-        assert_eq!(run.flags(), "--pattern steps --lo 0.02 --hi 0.9");
+        assert_eq!(
+            run.flags(),
+            "--pattern steps --setpoint-rat-lo-hi=\"0.02 0.9\""
+        );
         assert_eq!(
             run_between(&[CoulombFriction], &[ForceOffset])
                 .unwrap()
                 .flags(),
-            "--pattern chirp --lo -0.5 --hi 0.9"
+            "--pattern chirp --setpoint-rat-lo-hi=\"-0.5 0.9\""
         );
         // One model holds more: the run that reveals it.
         assert_eq!(

@@ -137,14 +137,18 @@ pub struct SimulationOnly {
     pub value_stderr: Option<f64>,
 }
 
+/// `propid drive`'s default setpoint range, the seed's (`--setpoint-rat-lo-hi`).
+const DRIVE_RANGE: (f64, f64) = (0.1, 0.9);
+
 /// A `propid drive` run that shows an effect, or tells two apart.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct SeparatingRun {
     /// `--pattern`.
     pub pattern: Pattern,
-    /// `--lo`, when the run needs its own (a negative one reverses the rotor).
+    /// The setpoint range's low end, when the run needs its own (a negative one reverses the
+    /// rotor).
     pub lo: Option<f64>,
-    /// `--hi`, when the run needs its own.
+    /// The setpoint range's high end, when the run needs its own.
     pub hi: Option<f64>,
     /// What the run shows that these data do not.
     pub why: &'static str,
@@ -156,14 +160,15 @@ impl SeparatingRun {
         format!("`propid drive {}`: {}", self.flags(), self.why)
     }
 
-    /// The `propid drive` flags.
+    /// The `propid drive` flags. The range is drive's one `--setpoint-rat-lo-hi` flag, the end
+    /// not given at drive's default (`DRIVE_RANGE`), written with `=` so that a negative low end
+    /// is not read as a flag.
     pub fn flags(&self) -> String {
         let mut s = format!("--pattern {}", self.pattern);
-        if let Some(lo) = self.lo {
-            s += &format!(" --lo {lo}");
-        }
-        if let Some(hi) = self.hi {
-            s += &format!(" --hi {hi}");
+        if self.lo.is_some() || self.hi.is_some() {
+            let lo = self.lo.unwrap_or(DRIVE_RANGE.0);
+            let hi = self.hi.unwrap_or(DRIVE_RANGE.1);
+            s += &format!(" --setpoint-rat-lo-hi=\"{lo} {hi}\"");
         }
         s
     }
@@ -263,7 +268,7 @@ impl Parameter {
     pub fn advice(self) -> &'static str {
         match self {
             Parameter::Inertia => "a run with larger accelerations would (`propid plan` designs one; `propid drive --pattern chirp` or `--pattern square`)",
-            Parameter::Drag => "a run over a wider range of speeds would (`propid drive --pattern steps --lo 0.02 --hi 0.9`)",
+            Parameter::Drag => "a run over a wider range of speeds would (`propid drive --pattern steps --setpoint-rat-lo-hi=\"0.02 0.9\"`)",
         }
     }
 }
