@@ -126,6 +126,24 @@ fn a_diameter_in_inches_read_as_metres_is_refused_or_warned() {
         "{err}"
     );
     assert!(err.contains("is outside"), "{err}");
+    // diagnose's text says it under C_Q, both ways: too small (inches read as metres) and too
+    // large (a diameter given too small, 7mm for 7in).
+    for (diameter, says) in [
+        ("2.5m", "--diameter 2.5in if inches were meant"),
+        ("7mm", "7mm for 7in is f = 25.4"),
+    ] {
+        let out = propid_ok(&["diagnose", t, "--diameter", diameter]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        let warning = text
+            .lines()
+            .skip_while(|l| !l.starts_with("   C_Q"))
+            .nth(2)
+            .unwrap_or_default();
+        assert!(
+            warning.starts_with("        Warning: C_Q = ") && warning.contains(says),
+            "{diameter}: {text}"
+        );
+    }
 }
 
 /// PyYAML (YAML 1.1) and Python's json read every number of the Result as a number, and the

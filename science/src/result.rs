@@ -354,16 +354,7 @@ impl Outcome {
         let Some(air) = air else { return };
         let k = 4.0 * std::f64::consts::PI.powi(2) / (air.density_kg_m3 * air.diameter_m.powi(5));
         let c_q = self.c2.scaled(k, "1");
-        if !C_Q_RANGE.contains(&c_q.value) {
-            self.warnings.push(format!(
-                "C_Q = {:.3e} is outside {:e}–{:e}, where propellers lie: is the diameter {} m right (a diameter in inches read as metres gives C_Q about 10⁸ times too small: write --diameter {}in)?",
-                c_q.value,
-                C_Q_RANGE.start(),
-                C_Q_RANGE.end(),
-                air.diameter_m,
-                air.diameter_m
-            ));
-        }
+        self.warnings.extend(c_q_warning(c_q.value, air.diameter_m));
         self.c_q = Some(c_q);
         self.air = Some(air);
     }
@@ -425,6 +416,9 @@ impl Outcome {
                 air.diameter_m / 0.0254,
                 air.density_kg_m3
             );
+            if let Some(w) = c_q_warning(c_q.value, air.diameter_m) {
+                s += &format!("        Warning: {w}\n");
+            }
         }
         if let Some(t) = &self.thrust {
             s += &v("C_T", &t.c_t);
@@ -550,4 +544,27 @@ impl Outcome {
         }
         s
     }
+}
+
+/// The warning a C_Q outside what propellers have earns (None inside it), with the unit mistake
+/// that would explain it: a diameter in inches read as metres makes C_Q about 10⁸ times too small;
+/// one given too small (7mm for 7in) makes it too large by the factor's fifth power.
+fn c_q_warning(c_q: f64, diameter_m: f64) -> Option<String> {
+    if C_Q_RANGE.contains(&c_q) {
+        return None;
+    }
+    let d = format!("{diameter_m:.6}");
+    let d = d.trim_end_matches('0').trim_end_matches('.');
+    let why = if c_q < *C_Q_RANGE.start() {
+        format!(
+            "a diameter in inches read as metres makes C_Q about 10⁸ times too small: --diameter {d}in if inches were meant"
+        )
+    } else {
+        "a diameter given too small by a factor f makes C_Q f⁵ times too large; 7mm for 7in is f = 25.4".to_string()
+    };
+    Some(format!(
+        "C_Q = {c_q:.3e} is outside {:e}–{:e}, where propellers lie: is the diameter {d} m right? ({why})",
+        C_Q_RANGE.start(),
+        C_Q_RANGE.end(),
+    ))
 }
