@@ -107,7 +107,7 @@ fn wrong_values_from_a_flag_a_variable_and_a_file_are_said_in_their_own_words() 
         "error: 6 settings are wrong:",
         &format!("{f}:3: uavcan.pub.sp_rat.type is read-only"),
         "--mtu: SLCAN carries Classic CAN only: set it to 8 (register uavcan.can.mtu, environment variable UAVCAN__CAN__MTU)",
-        "--setpoint-id: subject-ID 9000 is out of range: it must be in 0..=8191 (register uavcan.pub.sp_rat.id, environment variable UAVCAN__PUB__SP_RAT__ID)",
+        "--setpoint-id: subject-ID 9000 is out of range: it must be from 0 to 8191 (register uavcan.pub.sp_rat.id, environment variable UAVCAN__PUB__SP_RAT__ID)",
         "environment variable UAVCAN__SUB__FB_DYN__ID: 65535 leaves it unset, and it is needed (flag --feedback-id, register uavcan.sub.fb_dyn.id)",
         &format!("{f}:2: register period: must be a finite number above 0 and at most 86400 s (got 0) (flag --period, environment variable PERIOD)"),
         "environment variable SETPOINT_PERIOD: `fast` is not a valid real64[1] (flag --setpoint-period, register setpoint_period)",
@@ -158,6 +158,7 @@ fn said_once(out: &Output, device: &str, reason: &str, hints: &[&str]) {
         "Some(",
         "kind:",
         "No such file or directory",
+        "..=",
     ] {
         assert!(!err.contains(debug), "{debug:?} in {err}");
     }

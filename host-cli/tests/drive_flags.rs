@@ -25,7 +25,7 @@ fn check(args: &[&str], flag: &str) {
     assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
     assert!(err.contains(flag), "{args:?} should name {flag}: {err}");
     assert!(!err.contains("panicked"), "{args:?}: {err}");
-    for debug in ["Some(", "None", "{ ", "Error("] {
+    for debug in ["Some(", "None", "{ ", "Error(", "..="] {
         assert!(!err.contains(debug), "{args:?}: debug text in {err}");
     }
     // Refused before the interface (or the demo's pty) was touched.

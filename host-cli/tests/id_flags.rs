@@ -16,7 +16,7 @@ fn out_of_range_ids_are_refused_naming_the_range() {
                 "--node-id",
                 "200",
             ],
-            "node-ID 200 is out of range: it must be in 0..=127",
+            "node-ID 200 is out of range: it must be from 0 to 127",
         ),
         (
             &[
@@ -26,11 +26,11 @@ fn out_of_range_ids_are_refused_naming_the_range() {
                 "--feedback-id",
                 "9000",
             ],
-            "subject-ID 9000 is out of range: it must be in 0..=8191",
+            "subject-ID 9000 is out of range: it must be from 0 to 8191",
         ),
         (
             &["replay", "/dev/null-not-opened", "--feedback-id", "9000"],
-            "subject-ID 9000 is out of range: it must be in 0..=8191",
+            "subject-ID 9000 is out of range: it must be from 0 to 8191",
         ),
         (
             &[
@@ -39,7 +39,7 @@ fn out_of_range_ids_are_refused_naming_the_range() {
                 "slcan:/dev/null-not-opened",
                 "--node-id=-1",
             ],
-            "node-ID -1 is out of range: it must be in 0..=127",
+            "node-ID -1 is out of range: it must be from 0 to 127",
         ),
         (
             &[
@@ -49,7 +49,7 @@ fn out_of_range_ids_are_refused_naming_the_range() {
                 "--readiness-id",
                 "ten",
             ],
-            "a subject-ID must be an integer in 0..=8191",
+            "a subject-ID must be an integer from 0 to 8191",
         ),
     ];
     for (args, want) in cases {

@@ -222,13 +222,13 @@ pub fn replay(
     let feedback_id = options.feedback_id;
     let Some(subject) = SubjectId::new(feedback_id) else {
         return Err(InputError::invalid(format!(
-            "feedback subject-ID {feedback_id} is out of range (0..=8191)"
+            "feedback subject-ID {feedback_id} is out of range (0 to 8191)"
         ))
         .into());
     };
     if let Some(n) = options.source_node.filter(|&n| n > 127) {
         return Err(
-            InputError::invalid(format!("source node-ID {n} is out of range (0..=127)")).into(),
+            InputError::invalid(format!("source node-ID {n} is out of range (0 to 127)")).into(),
         );
     }
     let mut rx: Reassembler<1, 32, 64> = Reassembler::new(None);

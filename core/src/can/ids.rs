@@ -54,8 +54,8 @@ impl fmt::Display for IdError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (name, max) = (self.kind.name(), self.kind.max());
         match self.value {
-            Some(v) => write!(f, "{name} {v} is out of range: it must be in 0..={max}"),
-            None => write!(f, "a {name} must be an integer in 0..={max}"),
+            Some(v) => write!(f, "{name} {v} is out of range: it must be from 0 to {max}"),
+            None => write!(f, "a {name} must be an integer from 0 to {max}"),
         }
     }
 }
@@ -182,22 +182,22 @@ mod tests {
         let e = NodeId::try_from(200u16).unwrap_err();
         assert_eq!(
             e.to_string(),
-            "node-ID 200 is out of range: it must be in 0..=127"
+            "node-ID 200 is out of range: it must be from 0 to 127"
         );
         assert!(SubjectId::try_from(-1i32).is_err());
         assert!(ServiceId::try_from(512usize).is_err());
         assert_eq!("  42 ".parse::<NodeId>(), Ok(NodeId::from_const(42)));
         assert_eq!(
             "9000".parse::<SubjectId>().unwrap_err().to_string(),
-            "subject-ID 9000 is out of range: it must be in 0..=8191"
+            "subject-ID 9000 is out of range: it must be from 0 to 8191"
         );
         assert_eq!(
             "-3".parse::<ServiceId>().unwrap_err().to_string(),
-            "service-ID -3 is out of range: it must be in 0..=511"
+            "service-ID -3 is out of range: it must be from 0 to 511"
         );
         assert_eq!(
             "x7".parse::<NodeId>().unwrap_err().to_string(),
-            "a node-ID must be an integer in 0..=127"
+            "a node-ID must be an integer from 0 to 127"
         );
         const HEARTBEAT: SubjectId = SubjectId::from_const(7509);
         assert_eq!(HEARTBEAT.get(), 7509);

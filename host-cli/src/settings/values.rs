@@ -93,7 +93,7 @@ mod tests {
         assert_eq!(node_id("65535"), Ok(None));
         assert_eq!(
             node_id("200").unwrap_err().to_string(),
-            "node-ID 200 is out of range: it must be in 0..=127"
+            "node-ID 200 is out of range: it must be from 0 to 127"
         );
         assert_eq!(mtu("64"), Ok(Mtu::Fd));
         assert!(mtu("16").is_err());

@@ -35,7 +35,7 @@ pub(super) fn report_of(
     let n = estimator.count() as u64;
     if n < 10 {
         return Err(InputError::cannot_judge(format!(
-            "only {n} usable samples after trimming (rows {}..={} of {}); at least 10 are needed",
+            "only {n} usable samples after trimming (rows {}–{} of {}); at least 10 are needed",
             window.first + 1,
             window.last + 1,
             window.rows
@@ -56,7 +56,7 @@ pub(super) fn report_of(
     if !implausible.is_empty() {
         let why: Vec<String> = implausible.iter().map(|w| w.to_string()).collect();
         return Err(InputError::cannot_judge(format!(
-            "no fit is given for these rows ({}..={}): {}",
+            "no fit is given for data rows {}–{}: {}",
             window.first + 1,
             window.last + 1,
             why.join("; ")
@@ -81,7 +81,7 @@ pub(super) fn report_of(
     if est.condition_number.is_nan() || est.condition_number >= UNIDENTIFIABLE_CONDITION {
         return Err(InputError::cannot_judge(format!(
             "the data cannot identify the mass, c1 and c2 (condition number \
-             {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}..={} \
+             {:.3e}): force, velocity and velocity·|velocity| are linearly dependent in data rows {}–{} \
              (e.g. a constant velocity); record with a torque that varies the speed",
             est.condition_number,
             window.first + 1,
