@@ -154,6 +154,8 @@ pub enum Implausible {
         t_statistic: f64,
         /// Correlation of torque and speed (negative: flipped on a steady run).
         power_correlation: f64,
+        /// The force column was already read with `--flip-torque`: the flag is what flips it.
+        flip_torque_given: bool,
     },
     /// The velocity changes a named unit's multiple of the integrated acceleration.
     VelocityUnit {
@@ -182,12 +184,18 @@ impl std::fmt::Display for Implausible {
             Implausible::TorqueSign {
                 t_statistic,
                 power_correlation,
+                flip_torque_given,
             } => write!(
                 f,
                 "the torque sign looks flipped: the torque works against the motion it drives \
                  (1/J fitted without bounds has t = {t_statistic:.1}, torque·speed correlation \
                  {power_correlation:.2}; both are positive when torque and speed share a sign \
-                 convention): use --flip-torque if the force column's sign is reversed"
+                 convention): {}",
+                if flip_torque_given {
+                    "the force column is read with --flip-torque: drop it, its sign is right as recorded"
+                } else {
+                    "use --flip-torque if the force column's sign is reversed"
+                }
             ),
             Implausible::VelocityUnit { scale, unit } => write!(
                 f,
@@ -278,19 +286,33 @@ pub fn torque_sign(equations: &LoadEstimator<f64>) -> Option<Implausible> {
     flipped.then_some(Implausible::TorqueSign {
         t_statistic,
         power_correlation,
+        flip_torque_given: false,
     })
 }
 
 /// Every check on the data: `samples` a contiguous stretch of the fitted rows (in time order),
-/// `equations` the sums over all of them, both already read as the user asked.
-pub fn check(samples: &[Sample], equations: &LoadEstimator<f64>) -> Vec<Implausible> {
+/// `equations` the sums over all of them, both already read as the user asked (`reading`, which
+/// the advice takes into account).
+pub fn check(
+    samples: &[Sample],
+    equations: &LoadEstimator<f64>,
+    reading: &Reading,
+) -> Vec<Implausible> {
     let mut found = Vec::new();
     if let Some(units) = velocity_scale(samples).and_then(units_of) {
         found.push(units);
     }
     // A unit error makes the sign test meaningless (the columns do not belong together).
     if found.is_empty() {
-        found.extend(torque_sign(equations));
+        found.extend(torque_sign(equations).map(|mut sign| {
+            if let Implausible::TorqueSign {
+                flip_torque_given, ..
+            } = &mut sign
+            {
+                *flip_torque_given = reading.flip_torque;
+            }
+            sign
+        }));
     }
     found
 }
@@ -478,19 +500,37 @@ mod tests {
     #[test]
     fn a_clean_run_passes_and_each_mistake_is_named() {
         let (s, e) = run(1.0, SpeedUnit::RadPerSecond);
-        assert_eq!(check(&s, &e), vec![]);
+        assert_eq!(check(&s, &e, &Reading::default()), vec![]);
         let (s, e) = run(-1.0, SpeedUnit::RadPerSecond);
-        assert!(matches!(
-            check(&s, &e)[..],
-            [Implausible::TorqueSign { .. }]
-        ));
+        let found = check(&s, &e, &Reading::default());
+        assert!(matches!(found[..], [Implausible::TorqueSign { .. }]));
+        assert!(found[0].to_string().contains("use --flip-torque"));
+        // A right sign read with --flip-torque: the flag is the mistake, and the words say so.
+        let flipped = Reading {
+            flip_torque: true,
+            velocity_unit: SpeedUnit::RadPerSecond,
+        };
+        let (mut s, e) = run(1.0, SpeedUnit::RadPerSecond);
+        s.iter_mut().for_each(|x| flipped.apply(x));
+        let found = check(&s, &flipped.apply_to_estimator(&e), &flipped);
+        assert!(
+            matches!(
+                found[..],
+                [Implausible::TorqueSign {
+                    flip_torque_given: true,
+                    ..
+                }]
+            ) && found[0].to_string().contains("drop it")
+                && !found[0].to_string().contains("use --flip-torque"),
+            "{found:?}"
+        );
         for unit in [
             SpeedUnit::Rpm,
             SpeedUnit::RevPerSecond,
             SpeedUnit::DegPerSecond,
         ] {
             let (s, e) = run(1.0, unit);
-            let found = check(&s, &e);
+            let found = check(&s, &e, &Reading::default());
             assert!(
                 matches!(found[..], [Implausible::VelocityUnit { unit: u, .. }] if u == unit),
                 "{unit}: {found:?}"
@@ -502,7 +542,10 @@ mod tests {
             };
             let mut fixed = s.clone();
             fixed.iter_mut().for_each(|x| reading.apply(x));
-            assert_eq!(check(&fixed, &reading.apply_to_estimator(&e)), vec![]);
+            assert_eq!(
+                check(&fixed, &reading.apply_to_estimator(&e), &reading),
+                vec![]
+            );
         }
         let mut ms = run(1.0, SpeedUnit::RadPerSecond).0;
         ms.iter_mut().for_each(|s| s.t *= 1e3);

@@ -117,7 +117,11 @@ pub fn samples_needed(columns: usize) -> usize {
 }
 
 /// Checks the complete samples (in time order) before any model is fitted.
-pub fn check(samples: &[Sample], columns: usize) -> Vec<CannotJudge> {
+pub fn check(
+    samples: &[Sample],
+    columns: usize,
+    reading: &plausibility::Reading,
+) -> Vec<CannotJudge> {
     let mut why = Vec::new();
     let needed = samples_needed(columns);
     if samples.len() < needed {
@@ -172,7 +176,7 @@ pub fn check(samples: &[Sample], columns: usize) -> Vec<CannotJudge> {
             equations.update(s.force, s.velocity, s.acceleration);
         }
         why.extend(
-            plausibility::check(samples, &equations)
+            plausibility::check(samples, &equations, reading)
                 .into_iter()
                 .map(|finding| CannotJudge::Implausible { finding }),
         );

@@ -273,7 +273,7 @@ fn diagnose_complete(
     progress: Observer<'_>,
 ) -> Result<Report, InputError> {
     progress(Stage::Base);
-    let why = gate::check(&complete, widest(options.max_effects));
+    let why = gate::check(&complete, widest(options.max_effects), &options.reading);
     let extent = Extent::of(&complete);
     if !why.is_empty() {
         return Ok(Report::cannot_judge(extent.samples, extent.duration_s, why));

@@ -52,7 +52,7 @@ pub(super) fn report_of(
         c1_max: unbounded(args.c1_max),
         c2_max: unbounded(args.c2_max),
     };
-    let implausible = plausibility::check(&gate, estimator);
+    let implausible = plausibility::check(&gate, estimator, &args.reading);
     if !implausible.is_empty() {
         let why: Vec<String> = implausible.iter().map(|w| w.to_string()).collect();
         return Err(InputError::cannot_judge(format!(
