@@ -342,3 +342,44 @@ fn c_t_of_a_real_log_is_propid_propulsion_s() {
     let bare = std::fs::read_to_string(&bare).unwrap();
     assert!(bare.contains("give <code>--diameter</code>"));
 }
+
+/// A steady-state log (an RCbenchmark load cell at ~7 Hz on held plateaus): the Result is the
+/// seed's drag law from the plateaus with its standard error (the c2 docs/REAL_DATA.md's table
+/// gives), J is said not identified, and no line of the text shows a NaN.
+#[test]
+fn a_steady_state_log_gives_the_seeds_drag_law_and_no_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let tsv = dir.path().join("rc.tsv");
+    let log = common::repo().join("tests/data/esc_test_alspitz/rcbench/Log_2019-11-05_171350.csv");
+    propid_ok(&[
+        "import",
+        "rcbench",
+        log.to_str().unwrap(),
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    let t = tsv.to_str().unwrap();
+    let out = propid_ok(&["diagnose", t, "--format", "json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let law = &json["steady_state"];
+    let c2 = &json["result"]["c2"];
+    assert_eq!(c2["value"], law["c2"], "{c2}");
+    assert_eq!(c2["stderr"], law["c2_stderr"], "{c2}");
+    // REAL_DATA.md's table: 5.97e-8 for this run.
+    assert!(
+        (c2["value"].as_f64().unwrap() * 1e8 - 5.97).abs() <= 0.005,
+        "{c2}"
+    );
+    let not_identified = json["result"]["not_identified"].to_string();
+    assert!(
+        not_identified.contains("J") && !not_identified.contains("c2"),
+        "{not_identified}"
+    );
+    let text = String::from_utf8(propid_ok(&["diagnose", t]).stdout).unwrap();
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(
+        text.contains("Torque residual RMS on the steady-state data")
+            && !text.contains("rad/s (gain"),
+        "{text}"
+    );
+}

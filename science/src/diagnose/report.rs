@@ -519,6 +519,8 @@ pub struct DragLaw {
     pub samples: usize,
     /// c2 of the seed's law F = c2·ω² + F₀ [N·m·s²/rad²].
     pub c2: f64,
+    /// Its standard error.
+    pub c2_stderr: f64,
     /// Offset F₀ of the seed's law [N·m].
     pub offset: f64,
     /// Exponent of the extended law.

@@ -43,6 +43,8 @@ struct Score {
     folds: [f64; FOLDS],
     /// (k, F₀) fitted to all samples.
     theta: [f64; 2],
+    /// Their standard errors.
+    stderr: [f64; 2],
     /// In-sample residual sum of squares.
     rss: f64,
     /// Samples.
@@ -76,6 +78,7 @@ fn score(s: &Signals, idx: &[usize], p: f64) -> Option<Score> {
         mse: total / count.max(1.0),
         folds: per,
         theta: sol.theta,
+        stderr: sol.stderr,
         rss,
         n: all.count(),
     })
@@ -131,6 +134,7 @@ pub fn drag_law(s: &Signals) -> Option<DragLaw> {
     Some(DragLaw {
         samples: idx.len(),
         c2: seed.theta[0],
+        c2_stderr: seed.stderr[0],
         offset: seed.theta[1],
         exponent: p,
         exponent_stderr: stderr,
@@ -166,13 +170,20 @@ pub(crate) fn report(s: &Signals, law: DragLaw, why: InputError) -> Report {
     let base = BaseModel {
         c1: 0.0,
         c2: law.c2,
+        c2_stderr: law.c2_stderr,
         ..BaseModel::unknown()
     };
-    let extended = BaseModel {
-        c1: 0.0,
-        ..BaseModel::unknown()
-    }
-    .power_law(law.k, f64::NAN, law.exponent, super::rms(&s.velocity));
+    // The extended model is the free exponent's law only where the selection names it;
+    // otherwise the seed's law stands.
+    let extended = if law.decision == Decision::Named {
+        BaseModel {
+            c1: 0.0,
+            ..BaseModel::unknown()
+        }
+        .power_law(law.k, f64::NAN, law.exponent, super::rms(&s.velocity))
+    } else {
+        base.clone()
+    };
     let mut r = Report::cannot_judge(n, s.t[n - 1] - s.t[0], Vec::new());
     r.rate_hz = s.rate;
     r.unidentified = Unidentified::of(&base)

@@ -32,24 +32,39 @@ pub fn to_text(r: &Report, source: &str) -> String {
         "propid diagnose {source}: {} samples over {:.1} s at {:.0} Hz\n\n",
         r.samples, r.duration_s, r.rate_hz
     );
-    s += "1. Base model (the seed's): J·dω/dt = F − c2·ω|ω|, c1 = 0\n";
-    s += &format!(
-        "   J  = {:.4e} ± {:.1e} kg·m²\n   c2 = {:.4e} ± {:.1e} N·m·s²/rad²\n",
-        b.inertia, b.inertia_stderr, b.c2, b.c2_stderr
-    );
-    s += &format!(
-        "   What the simulation gets wrong: simulated open-loop from the measured force, its velocity\n   \
-         misses the measured one by {:.3} rad/s RMS on the held-out last 30 % of the data.\n\n",
-        r.simulation_rms.base
-    );
+    // Steady-state data (a slow load cell on held plateaus): the drag law alone, no dynamics.
+    let steady = r.steady_state.as_ref().filter(|_| !b.inertia.is_finite());
+    if let Some(law) = steady {
+        s += "1. Base model (the seed's) on steady-state data: F = c2·ω² + F₀ (no dynamics: J is not identified)\n";
+        s += &format!(
+            "   c2 = {:.4e} ± {:.1e} N·m·s²/rad², F₀ = {:.3e} N·m, from {} torque samples above 10 % of the top speed;\n   \
+             torque residual {:.3e} N·m RMS.\n\n",
+            b.c2, b.c2_stderr, law.offset, law.samples, r.simulation_rms.base
+        );
+    } else {
+        s += "1. Base model (the seed's): J·dω/dt = F − c2·ω|ω|, c1 = 0\n";
+        s += &format!(
+            "   J  = {:.4e} ± {:.1e} kg·m²\n   c2 = {:.4e} ± {:.1e} N·m·s²/rad²\n",
+            b.inertia, b.inertia_stderr, b.c2, b.c2_stderr
+        );
+        s += &format!(
+            "   What the simulation gets wrong: simulated open-loop from the measured force, its velocity\n   \
+             misses the measured one by {:.3} rad/s RMS on the held-out last 30 % of the data.\n\n",
+            r.simulation_rms.base
+        );
+    }
     s += "2. Residual of the base model, correlation with:\n";
     for (name, c) in &r.residual_analysis.correlations {
         s += &format!("   {name:<26} {c:+.3}\n");
     }
-    s += &format!(
-        "   dominant frequency {:.3} Hz ({:.0}× the median of the spectrum)\n\n",
-        r.residual_analysis.dominant_frequency_hz, r.residual_analysis.peak_to_median
-    );
+    if r.residual_analysis.dominant_frequency_hz.is_finite() {
+        s += &format!(
+            "   dominant frequency {:.3} Hz ({:.0}× the median of the spectrum)\n\n",
+            r.residual_analysis.dominant_frequency_hz, r.residual_analysis.peak_to_median
+        );
+    } else {
+        s += "   (no residual in time: the steady-state data are fitted as a torque law)\n\n";
+    }
     s += "3. Candidate effects, searched in rounds: each tried on the model of the rounds before, scored on\n   \
           held-out data (blocked 10-fold cross-validation: the acceleration equation's error and the open-loop\n   \
           simulated velocity's; equation and simulation: how much lower each pooled held-out error is, negative\n   \
@@ -104,6 +119,11 @@ pub fn to_text(r: &Report, source: &str) -> String {
                 u.parameter.symbol(),
                 u.value,
                 crate::plausibility::torque_noise_corrected_words(u.parameter.symbol(), bias)
+            ),
+            None if !u.value.is_finite() => format!(
+                "   These data do not identify {}: they give no value of it; {}.\n",
+                u.parameter.symbol(),
+                u.parameter.advice()
             ),
             None => format!(
                 "   These data do not identify {}: {} = {:.4e} ± {:.1e} (more than {:.0} % of it, or no finite error); {}.\n",
@@ -196,10 +216,17 @@ pub fn to_text(r: &Report, source: &str) -> String {
             );
         }
     }
-    s += &format!(
-        "   Simulated-velocity RMS error on held-out data: base {:.3} → extended {:.3} rad/s (gain {:.1} %)\n",
-        r.simulation_rms.base, r.simulation_rms.extended, r.simulation_rms.gain_percent
-    );
+    if steady.is_some() {
+        s += &format!(
+            "   Torque residual RMS on the steady-state data: seed's law {:.3e} → extended {:.3e} N·m (gain {:.1} %)\n",
+            r.simulation_rms.base, r.simulation_rms.extended, r.simulation_rms.gain_percent
+        );
+    } else {
+        s += &format!(
+            "   Simulated-velocity RMS error on held-out data: base {:.3} → extended {:.3} rad/s (gain {:.1} %)\n",
+            r.simulation_rms.base, r.simulation_rms.extended, r.simulation_rms.gain_percent
+        );
+    }
     match &r.unexplained {
         Some(u) => s += &format!("   Unexplained: {}\n", u.description),
         None => s += "   Unexplained periodic structure: none left in the residual\n",
