@@ -132,6 +132,19 @@ fn a_parameter_on_its_bound_is_not_identified_and_has_no_zero_error() {
     let se = v["mass_stderr"].as_f64().unwrap();
     assert!(se > 0.0 && se.is_finite(), "{json}");
     assert!(err.contains("the mass sits on its bound"), "{err}");
+    // The Result (stderr) calls it J and gives no statistical error for a value on its bound.
+    let j_line = err
+        .lines()
+        .find(|l| l.starts_with("   J    ="))
+        .unwrap_or_default();
+    assert!(
+        j_line.ends_with("(not identified by these data)") && !j_line.contains("statistical"),
+        "{err}"
+    );
+    assert!(
+        err.contains("Not identified (values are not measurements): J"),
+        "{err}"
+    );
     // c2 held at a bound far below its value: named, with a finite non-zero error.
     let out = propid(&["fit", "--c2-max", "1e-9", p], None);
     let (yaml, err) = text(&out);

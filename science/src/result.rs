@@ -168,18 +168,32 @@ const C2_UNIT: &str = "N·m·s²/rad²";
 impl Outcome {
     /// The Result of the seed's fit.
     pub fn from_fit(fit: &FitReport, c1_free: bool, air: Option<Air>) -> Outcome {
+        // A parameter the fit lists as not identified (on its bound: the error of the fit
+        // without bounds is no precision of a bound) carries no statistical error here.
+        let value = |name: &str, v: f64, unit: &'static str, stderr: f64| {
+            let mut x = Value::new(v, unit, stderr, None);
+            if fit.not_identified.contains(&name) {
+                x.stderr = None;
+            }
+            x
+        };
         let mut out = Outcome {
             model: Model::Seed,
-            inertia: Value::new(fit.mass, J_UNIT, fit.mass_stderr, None),
-            c2: Value::new(fit.c2, C2_UNIT, fit.c2_stderr, None),
-            c1: c1_free.then(|| Value::new(fit.c1, "N·m·s/rad", fit.c1_stderr, None)),
+            inertia: value("mass", fit.mass, J_UNIT, fit.mass_stderr),
+            c2: value("c2", fit.c2, C2_UNIT, fit.c2_stderr),
+            c1: c1_free.then(|| value("c1", fit.c1, "N·m·s/rad", fit.c1_stderr)),
             effects: Vec::new(),
             c_q: None,
             thrust: None,
             air: None,
             seed_model_holds: None,
             incomplete: false,
-            not_identified: fit.not_identified.iter().map(|s| s.to_string()).collect(),
+            // The Result calls the inertia J, as diagnose's does (the seed's YAML: mass).
+            not_identified: fit
+                .not_identified
+                .iter()
+                .map(|&s| if s == "mass" { "J" } else { s }.to_string())
+                .collect(),
             rows_used: fit.samples,
             rows_dropped: fit.rows.saturating_sub(fit.samples),
             warnings: fit.warnings.clone(),
@@ -342,12 +356,7 @@ impl Outcome {
     /// C_Q and its range check; every parameter without a standard error listed.
     fn finish(&mut self, air: Option<Air>) {
         for (name, v) in [("J", &self.inertia), ("c2", &self.c2)] {
-            if v.stderr.is_none()
-                && !self
-                    .not_identified
-                    .iter()
-                    .any(|n| n == name || (name == "J" && n == "mass"))
-            {
+            if v.stderr.is_none() && !self.not_identified.iter().any(|n| n == name) {
                 self.not_identified.push(name.to_string());
             }
         }
