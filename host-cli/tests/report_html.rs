@@ -64,6 +64,16 @@ fn report_is_one_self_contained_page_with_fit_diagnosis_and_plots() {
     ] {
         assert!(page.contains(want), "the report lacks `{want}`");
     }
+    // Its commands reproduce it: each with the diameter in metres and its unit (a bare number
+    // is refused), the diagnosis too.
+    let reproduce = &page[page.find("<h2>Reproduce</h2>").unwrap()..];
+    for command in ["propid fit", "propid diagnose", "propid report"] {
+        let line = reproduce
+            .lines()
+            .find(|l| l.contains(&format!("{command} ")) && l.contains(".tsv"))
+            .unwrap_or_else(|| panic!("no `{command}` line"));
+        assert!(line.ends_with(" --diameter 0.1778m"), "{line}");
+    }
     // Works offline: uPlot is inside, nothing is loaded from elsewhere.
     assert!(page.contains("uPlot"));
     assert!(!page.contains("<script src") && !page.contains("<link"));

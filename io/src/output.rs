@@ -59,7 +59,18 @@ impl AtomicOutput {
                     Some(d) if !d.as_os_str().is_empty() => d,
                     _ => Path::new("."),
                 };
-                let file = tempfile::Builder::new()
+                let mut builder = tempfile::Builder::new();
+                // A new output gets the mode any new file gets (0666 less the umask), not a
+                // temporary file's 0600; a replaced one keeps its own.
+                #[cfg(unix)]
+                {
+                    use std::os::unix::fs::PermissionsExt;
+                    builder.permissions(match &exists {
+                        Ok(m) => m.permissions(),
+                        Err(_) => std::fs::Permissions::from_mode(0o666),
+                    });
+                }
+                let file = builder
                     .prefix(&format!(
                         ".{}.",
                         target
@@ -201,6 +212,28 @@ impl Write for Output {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A new output has the mode `File::create` gives (0666 less the umask), not a temporary
+    /// file's 0600; a replaced output keeps the mode it had.
+    #[cfg(unix)]
+    #[test]
+    fn an_output_has_a_new_files_mode_or_keeps_its_own() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let plain = dir.path().join("plain");
+        std::fs::File::create(&plain).unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        let out = dir.path().join("out.html");
+        let mut w = AtomicOutput::create(&out, &[]).unwrap();
+        w.write_all(b"page").unwrap();
+        w.commit().unwrap();
+        assert_eq!(mode(&out), mode(&plain));
+        std::fs::set_permissions(&out, std::fs::Permissions::from_mode(0o640)).unwrap();
+        let mut w = AtomicOutput::create(&out, &[]).unwrap();
+        w.write_all(b"again").unwrap();
+        w.commit().unwrap();
+        assert_eq!(mode(&out), 0o640);
+    }
 
     #[test]
     fn an_input_is_never_the_output_and_nothing_is_half_written() {

@@ -226,12 +226,19 @@ fn build_from(
         s += &html::escape(c);
         s.push('\n');
     }
+    // In metres with its unit (a bare number is refused), without float noise.
     let diameter = fit_options
         .diameter
-        .map(|d| format!(" --diameter {d}"))
+        .map(|d| {
+            let m = format!("{d:.6}");
+            format!(
+                " --diameter {}m",
+                m.trim_end_matches('0').trim_end_matches('.')
+            )
+        })
         .unwrap_or_default();
     s += &html::escape(&format!(
-        "propid fit {name}{diameter}\npropid diagnose {name}\npropid report {name}{diameter}\n"
+        "propid fit {name}{diameter}\npropid diagnose {name}{diameter}\npropid report {name}{diameter}\n"
     ));
     s += "</pre>\n<p>Made by propid ";
     s += env!("CARGO_PKG_VERSION");
