@@ -333,7 +333,7 @@ fn invalid_settings_are_refused_before_anything_is_sent() {
             &[("UAVCAN__SUB__FB_DYN__ID", "")],
             "--feedback-id is not set (nor its register uavcan.sub.fb_dyn.id in a --registers file, nor its environment variable UAVCAN__SUB__FB_DYN__ID)",
         ),
-        (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "0..=8191"),
+        (&[("UAVCAN__PUB__SP_RAT__ID", "9000")], "from 0 to 8191"),
     ];
     for (env, want) in cases {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_propid"));

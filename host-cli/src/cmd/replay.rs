@@ -14,10 +14,10 @@ use crate::InputError;
 pub struct Args {
     /// The candump log (`candump -L` format); `-` for standard input.
     pub file: PathBuf,
-    /// Subject-ID of the dynamics feedback (0..=8191).
+    /// Subject-ID of the dynamics feedback (0 to 8191).
     #[arg(long, env = "UAVCAN__SUB__FB_DYN__ID")]
     pub feedback_id: propid_core::can::SubjectId,
-    /// Only the feedback of this node-ID (0..=127). Without it, the first node seen on the subject
+    /// Only the feedback of this node-ID (0 to 127). Without it, the first node seen on the subject
     /// is used, and a second node there is an error.
     #[arg(long)]
     pub source_node: Option<propid_core::can::NodeId>,
