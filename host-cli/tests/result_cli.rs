@@ -285,20 +285,26 @@ fn thrust_in_gram_force_read_as_newtons_is_named() {
     assert!(warnings.contains("gram-force"), "{warnings}");
 }
 
+/// An RCbenchmark log of tests/data imported as `rc.tsv` in `dir`.
+fn rcbench(dir: &Path, log: &str) -> PathBuf {
+    let tsv = dir.join("rc.tsv");
+    let csv = common::repo().join(format!("tests/data/esc_test_alspitz/rcbench/{log}.csv"));
+    propid_ok(&[
+        "import",
+        "rcbench",
+        csv.to_str().unwrap(),
+        "-o",
+        tsv.to_str().unwrap(),
+    ]);
+    tsv
+}
+
 #[test]
 fn c_t_of_a_real_log_is_propid_propulsion_s() {
     // An RCbenchmark export: the thrust cell updates on rows the torque does not, so the
     // Result's C_T must rest on every row, as `propid propulsion` reads them.
     let dir = tempfile::tempdir().unwrap();
-    let tsv = dir.path().join("rc.tsv");
-    let log = common::repo().join("tests/data/esc_test_alspitz/rcbench/Log_2019-11-07_184325.csv");
-    propid_ok(&[
-        "import",
-        "rcbench",
-        log.to_str().unwrap(),
-        "-o",
-        tsv.to_str().unwrap(),
-    ]);
+    let tsv = rcbench(dir.path(), "Log_2019-11-07_184325");
     let t = tsv.to_str().unwrap();
     let p = propid_ok(&["propulsion", t, "--diameter", "7in", "--format", "json"]);
     let p: serde_json::Value = serde_json::from_slice(&p.stdout).unwrap();
@@ -349,15 +355,7 @@ fn c_t_of_a_real_log_is_propid_propulsion_s() {
 #[test]
 fn a_steady_state_log_gives_the_seeds_drag_law_and_no_nan() {
     let dir = tempfile::tempdir().unwrap();
-    let tsv = dir.path().join("rc.tsv");
-    let log = common::repo().join("tests/data/esc_test_alspitz/rcbench/Log_2019-11-05_171350.csv");
-    propid_ok(&[
-        "import",
-        "rcbench",
-        log.to_str().unwrap(),
-        "-o",
-        tsv.to_str().unwrap(),
-    ]);
+    let tsv = rcbench(dir.path(), "Log_2019-11-05_171350");
     let t = tsv.to_str().unwrap();
     let out = propid_ok(&["diagnose", t, "--format", "json"]);
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
