@@ -267,8 +267,9 @@ pub fn units_of(scale: f64) -> Option<Implausible> {
 }
 
 /// The torque-sign check on the normal equations of the fitted rows: the freely fitted 1/J, and
-/// the correlation of torque with speed (−Σ Q·(−ω) over √(ΣQ²·Σω²), from the same sums).
-pub fn torque_sign(equations: &LoadEstimator<f64>) -> Option<Implausible> {
+/// the correlation of torque with speed (−Σ Q·(−ω) over √(ΣQ²·Σω²), from the same sums);
+/// `flip_torque_given`: the rows were read with `--flip-torque` (the advice then drops it).
+pub fn torque_sign(equations: &LoadEstimator<f64>, flip_torque_given: bool) -> Option<Implausible> {
     let a = equations.equations().matrix();
     let power_correlation = if a[0][0] > 0.0 && a[1][1] > 0.0 {
         -a[0][1] / (a[0][0] * a[1][1]).sqrt()
@@ -286,7 +287,7 @@ pub fn torque_sign(equations: &LoadEstimator<f64>) -> Option<Implausible> {
     flipped.then_some(Implausible::TorqueSign {
         t_statistic,
         power_correlation,
-        flip_torque_given: false,
+        flip_torque_given,
     })
 }
 
@@ -304,15 +305,7 @@ pub fn check(
     }
     // A unit error makes the sign test meaningless (the columns do not belong together).
     if found.is_empty() {
-        found.extend(torque_sign(equations).map(|mut sign| {
-            if let Implausible::TorqueSign {
-                flip_torque_given, ..
-            } = &mut sign
-            {
-                *flip_torque_given = reading.flip_torque;
-            }
-            sign
-        }));
+        found.extend(torque_sign(equations, reading.flip_torque));
     }
     found
 }
@@ -574,7 +567,7 @@ mod tests {
                 assert!((a[i][k] / b[i][k] - 1.0).abs() < 1e-9, "{i}{k}");
             }
         }
-        assert!(torque_sign(&scaled).is_none());
+        assert!(torque_sign(&scaled, false).is_none());
     }
 
     #[test]
